@@ -1,0 +1,140 @@
+//! Indexed triangle meshes.
+//!
+//! Units: scene units throughout (whatever the file used). Triangles are two-sided: their
+//! winding is kept for export but never used to decide which side is "outside" (SPEC §1).
+
+use glam::{Affine3A, Vec3};
+
+use crate::error::{Error, Result};
+
+/// An axis-aligned bounding box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounds {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Bounds {
+    pub const EMPTY: Bounds = Bounds {
+        min: Vec3::INFINITY,
+        max: Vec3::NEG_INFINITY,
+    };
+
+    pub fn grow(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    /// Length of the diagonal: `l_diag` of SPEC §1 and §4.
+    pub fn diagonal(&self) -> f32 {
+        (self.max - self.min).length()
+    }
+
+    pub fn center(&self) -> Vec3 {
+        0.5 * (self.min + self.max)
+    }
+}
+
+/// A triangle soup with shared vertices: `indices[i]` names the three corners of triangle `i`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    pub positions: Vec<Vec3>,
+    pub indices: Vec<[u32; 3]>,
+}
+
+impl Mesh {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len()
+    }
+
+    /// The three corners of triangle `i`.
+    pub fn triangle(&self, i: usize) -> [Vec3; 3] {
+        self.indices[i].map(|v| self.positions[v as usize])
+    }
+
+    /// Adds `vertices` and returns the index of the first, for building faces on top.
+    pub fn add_vertices(&mut self, vertices: impl IntoIterator<Item = Vec3>) -> u32 {
+        let first = self.positions.len() as u32;
+        self.positions.extend(vertices);
+        first
+    }
+
+    pub fn add_triangle(&mut self, a: u32, b: u32, c: u32) {
+        self.indices.push([a, b, c]);
+    }
+
+    /// Appends `other`, keeping its triangles' shapes and order.
+    pub fn append(&mut self, other: &Mesh) {
+        let offset = self.positions.len() as u32;
+        self.positions.extend_from_slice(&other.positions);
+        self.indices
+            .extend(other.indices.iter().map(|t| t.map(|v| v + offset)));
+    }
+
+    /// Appends `other` moved by `transform`.
+    pub fn append_transformed(&mut self, other: &Mesh, transform: Affine3A) {
+        let offset = self.positions.len() as u32;
+        self.positions.extend(
+            other
+                .positions
+                .iter()
+                .map(|&p| transform.transform_point3(p)),
+        );
+        self.indices
+            .extend(other.indices.iter().map(|t| t.map(|v| v + offset)));
+    }
+
+    pub fn transform(&mut self, transform: Affine3A) {
+        for p in &mut self.positions {
+            *p = transform.transform_point3(*p);
+        }
+    }
+
+    /// Bounds of the vertices that triangles use.
+    pub fn bounds(&self) -> Bounds {
+        let mut b = Bounds::EMPTY;
+        for t in &self.indices {
+            for &v in t {
+                b.grow(self.positions[v as usize]);
+            }
+        }
+        b
+    }
+
+    /// Checks what the renderer relies on: at least one triangle, every index in range, every
+    /// used vertex finite. The message names the first offender.
+    pub fn validate(&self) -> Result<()> {
+        if self.indices.is_empty() {
+            return Err(Error::scene("the scene has no triangles"));
+        }
+        let n = self.positions.len();
+        for (i, t) in self.indices.iter().enumerate() {
+            if let Some(&v) = t.iter().find(|&&v| v as usize >= n) {
+                return Err(Error::scene(format!(
+                    "triangle {i} uses vertex {v}, but there are only {n} vertices"
+                )));
+            }
+        }
+        let used = {
+            let mut used = vec![false; n];
+            self.indices.iter().flatten().for_each(|&v| used[v as usize] = true);
+            used
+        };
+        if let Some((v, p)) = self
+            .positions
+            .iter()
+            .enumerate()
+            .find(|&(v, p)| used[v] && !p.is_finite())
+        {
+            return Err(Error::scene(format!(
+                "vertex {v} is not finite: ({}, {}, {})",
+                p.x, p.y, p.z
+            )));
+        }
+        Ok(())
+    }
+}

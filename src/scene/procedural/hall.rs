@@ -1,0 +1,7 @@
+//! Placeholder: being written.
+use crate::scene::Scene;
+pub fn hall() -> Scene {
+    let mut s = super::validation::sphere(5.0, 4);
+    s.name = "hall".into();
+    s
+}
