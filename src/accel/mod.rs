@@ -1,0 +1,54 @@
+//! Ray casting: closest hits against the scene's triangles (SPEC §2).
+//!
+//! Guarantees every estimator relies on:
+//! - **Watertight**: a ray cannot slip between two triangles that share an edge
+//!   ([`triangle`]), and BVH boxes are tested conservatively ([`bvh`]). In a closed room no
+//!   ray escapes.
+//! - **Robust origins**: a ray leaving a surface starts at [`offset_ray_origin`] of the hit,
+//!   and a triangle hit closer than its own `t` error bound is rejected, so a ray never re-hits
+//!   the surface it leaves, and near-horizon hits in concave places are kept.
+//!
+//! The interface is [`RayCaster`]: no per-ray allocation and no dynamic dispatch; estimators
+//! are generic over it. [`Accel`] is the implementation (obvhs's compressed wide BVH).
+//! Distances are in scene units; directions must be unit length for `t` to be a distance.
+
+pub mod bvh;
+pub mod float_error;
+pub mod triangle;
+
+use glam::Vec3;
+
+pub use bvh::{Accel, BuildQuality};
+pub use float_error::offset_ray_origin;
+
+/// A ray's first hit, with what a secondary ray needs to leave the surface robustly.
+#[derive(Clone, Copy, Debug)]
+pub struct Hit {
+    /// Distance along the ray (in units of the direction's length).
+    pub t: f32,
+    /// Index of the triangle in the scene mesh.
+    pub triangle: u32,
+    /// The hit point, from barycentric interpolation of the triangle's corners.
+    pub point: Vec3,
+    /// Absolute floating-point error bound of `point`, per axis.
+    pub point_error: Vec3,
+    /// Unit geometric normal of the triangle, in its winding's orientation (not yet flipped).
+    pub normal: Vec3,
+}
+
+impl Hit {
+    /// Origin for a ray leaving this hit towards `w`.
+    #[inline]
+    pub fn spawn_origin(&self, w: Vec3) -> Vec3 {
+        offset_ray_origin(self.point, self.point_error, self.normal, w)
+    }
+}
+
+/// What estimators need from ray casting.
+pub trait RayCaster: Sync {
+    /// The first hit along `origin + t·direction`, `0 < t < t_max`.
+    fn closest_hit(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<Hit>;
+
+    /// Distance to the first hit, `+inf` if the ray escapes (cheaper than `closest_hit`).
+    fn hit_distance(&self, origin: Vec3, direction: Vec3, t_max: f32) -> f32;
+}

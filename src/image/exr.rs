@@ -1,0 +1,52 @@
+//! OpenEXR files with one float32 channel `Y` holding H per pixel (SPEC §7).
+
+use std::io::Cursor;
+use std::path::Path;
+
+use exr::prelude::*;
+
+use super::{write_atomically, HmdImage};
+use crate::error::{Error as HmdError, Result};
+
+/// The channel name every hmdist EXR uses.
+pub const CHANNEL: &str = "Y";
+
+pub fn write(image: &HmdImage, path: &Path) -> Result<()> {
+    let channel = AnyChannel::new(CHANNEL, FlatSamples::F32(image.data.clone()));
+    let layer = Layer::new(
+        (image.width as usize, image.height as usize),
+        LayerAttributes::named("hmd"),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(SmallVec::from_elem(channel, 1)),
+    );
+    let mut bytes = Cursor::new(Vec::new());
+    Image::from_layer(layer)
+        .write()
+        .to_buffered(&mut bytes)
+        .map_err(|e| HmdError::file(path, format!("cannot encode EXR: {e}")))?;
+    write_atomically(path, bytes.get_ref())
+}
+
+/// Reads an EXR written by hmdist (or any EXR whose first layer has a `Y` channel, or a
+/// single channel).
+pub fn read(path: &Path) -> Result<HmdImage> {
+    let bytes = std::fs::read(path).map_err(|e| HmdError::io(path, "read", e))?;
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(Cursor::new(bytes))
+        .map_err(|e| HmdError::file(path, format!("not a readable EXR image: {e}")))?;
+    let layer = &image.layer_data;
+    let channels = &layer.channel_data.list;
+    let channel = channels
+        .iter()
+        .find(|c| c.name.eq(CHANNEL))
+        .or(if channels.len() == 1 { channels.first() } else { None })
+        .ok_or_else(|| HmdError::file(path, "the EXR has no channel named Y"))?;
+    let data: Vec<f32> = channel.sample_data.values_as_f32().collect();
+    let (w, h) = (layer.size.width() as u32, layer.size.height() as u32);
+    Ok(HmdImage::new(w, h, data))
+}
