@@ -9,12 +9,19 @@
 //! - obvhs's own triangle tests are not used: `Triangle::intersect` (Möller–Trumbore) is not
 //!   watertight, and obvhs 0.4's `RtTriangle::intersect_embree` returns `t` scaled by the
 //!   determinant, which picks the wrong closest hit.
+//! - obvhs's node test is not used either: it culls boxes that end before `t = 1e-4` (a fixed
+//!   epsilon, in scene units) and its slab test can round a box that a ray grazes into a miss.
+//!   [`NodeRay::child_hits`] widens each slab by the error bound of its own arithmetic, so
+//!   the test is conservative and scale-free: together with the watertight triangle test, no
+//!   ray slips through a closed mesh.
 
 use std::time::Duration;
 
-use glam::{Vec3, Vec3A};
-use obvhs::{cwbvh::builder::build_cwbvh_from_tris, cwbvh::CwBvh, ray::Ray, triangle::Triangle, BvhBuildParams};
+use glam::{UVec2, Vec3, Vec3A, Vec4};
+use obvhs::cwbvh::{builder::build_cwbvh_from_tris, node::CwBvhNode, CwBvh};
+use obvhs::{triangle::Triangle, BvhBuildParams};
 
+use super::float_error::gamma;
 use super::triangle::{barycentric_point_error, WatertightRay};
 use super::{Hit, RayCaster};
 use crate::scene::Mesh;
@@ -78,20 +85,21 @@ impl Accel {
     #[inline(always)]
     fn trace(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<(usize, f32, [f32; 3])> {
         let ray = WatertightRay::new(origin, direction);
-        let mut node_ray = Ray::new(origin.into(), direction.into(), 0.0, t_max);
+        let node_ray = NodeRay::new(origin, direction);
+        let mut t_max = t_max;
         let mut best: Option<(usize, f32, [f32; 3])> = None;
-        let mut state = self.bvh.new_traversal(node_ray.direction);
+        let mut state = self.bvh.new_traversal(direction.into());
         let mut node;
         obvhs::traverse!(
             self.bvh,
             node,
             state,
-            node.intersect_ray(&node_ray, state.oct_inv4),
+            node_ray.child_hits(node, t_max, state.oct_inv4),
             {
                 let id = state.primitive_id as usize;
                 let [p0, p1, p2] = self.corners[id];
-                if let Some(hit) = ray.intersect(p0, p1, p2, node_ray.tmax) {
-                    node_ray.tmax = hit.t;
+                if let Some(hit) = ray.intersect(p0, p1, p2, t_max) {
+                    t_max = hit.t;
                     best = Some((id, hit.t, hit.b));
                 }
             }
@@ -100,7 +108,90 @@ impl Accel {
     }
 }
 
-use glam::UVec2;
+/// A ray prepared for conservative slab tests against a node's quantised child boxes.
+#[derive(Clone, Copy)]
+struct NodeRay {
+    origin: Vec3A,
+    /// `1/d` per axis; a zero component is replaced by a tiny one of the same sign, so
+    /// parallel slabs give ±huge instead of NaN.
+    inv_direction: Vec3A,
+}
+
+impl NodeRay {
+    #[inline(always)]
+    fn new(origin: Vec3, direction: Vec3) -> Self {
+        let safe = |d: f32| if d == 0.0 { 1e-30f32.copysign(d) } else { d };
+        NodeRay {
+            origin: origin.into(),
+            inv_direction: Vec3A::new(1.0 / safe(direction.x), 1.0 / safe(direction.y), 1.0 / safe(direction.z)),
+        }
+    }
+
+    /// The traversal hit mask of `node`'s children whose boxes the ray meets in `[0, t_max]`.
+    ///
+    /// A child box is `p + q·e` with 8-bit `q` and power-of-two `e`, so slab distances are
+    /// `q·(e/d) + (p − o)/d`. Each is computed with a few roundings; the slab is widened by
+    /// the bound `γ(5)·(255·|e/d| + |(p − o)/d|)` on their error, per axis, so no box the ray
+    /// truly meets is rejected (at the price of a few extra box hits).
+    #[inline(always)]
+    fn child_hits(&self, node: &CwBvhNode, t_max: f32, oct_inv4: u32) -> u32 {
+        let scale = node.compute_extent() * self.inv_direction;
+        let offset = (Vec3A::from(node.p) - self.origin) * self.inv_direction;
+        let slop = gamma(5) * (255.0 * scale.abs() + offset.abs());
+        let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
+        let mut hit_mask = 0;
+        let axes = [
+            (dequantize(&node.child_min_x), dequantize(&node.child_max_x)),
+            (dequantize(&node.child_min_y), dequantize(&node.child_max_y)),
+            (dequantize(&node.child_min_z), dequantize(&node.child_max_z)),
+        ];
+        for half in 0..2 {
+            let slab = |axis: usize| {
+                let (lo, hi) = axes[axis];
+                let t0 = lo[half] * scale[axis] + Vec4::splat(offset[axis]);
+                let t1 = hi[half] * scale[axis] + Vec4::splat(offset[axis]);
+                (t0.min(t1) - Vec4::splat(slop[axis]), t0.max(t1) + Vec4::splat(slop[axis]))
+            };
+            let (near_x, far_x) = slab(0);
+            let (near_y, far_y) = slab(1);
+            let (near_z, far_z) = slab(2);
+            let near = near_x.max(near_y).max(near_z).max(Vec4::ZERO);
+            let far = far_x.min(far_y).min(far_z).min(Vec4::splat(t_max));
+            let mask = near.cmple(far).bitmask();
+            for j in 0..4 {
+                if mask & (1 << j) != 0 {
+                    let child = 4 * half + j;
+                    let bits = ((child_bits8 >> (8 * child)) & 0xFF) as u32;
+                    let index = ((bit_index8 >> (8 * child)) & 0xFF) as u32;
+                    hit_mask |= bits << index;
+                }
+            }
+        }
+        hit_mask
+    }
+}
+
+/// Eight quantised box bounds as two `Vec4`s of floats.
+#[inline(always)]
+fn dequantize(q: &[u8; 8]) -> [Vec4; 2] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        // SAFETY: SSE2 is part of the x86_64 baseline; the load reads exactly the 8 bytes of `q`.
+        unsafe {
+            use std::arch::x86_64::*;
+            let bytes = _mm_loadl_epi64(q.as_ptr() as *const __m128i);
+            let words = _mm_unpacklo_epi8(bytes, _mm_setzero_si128());
+            let lo = _mm_unpacklo_epi16(words, _mm_setzero_si128());
+            let hi = _mm_unpackhi_epi16(words, _mm_setzero_si128());
+            [Vec4::from(_mm_cvtepi32_ps(lo)), Vec4::from(_mm_cvtepi32_ps(hi))]
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let f = |i: usize| Vec4::new(q[i] as f32, q[i + 1] as f32, q[i + 2] as f32, q[i + 3] as f32);
+        [f(0), f(4)]
+    }
+}
 
 impl RayCaster for Accel {
     fn closest_hit(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<Hit> {
