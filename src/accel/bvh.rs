@@ -159,12 +159,12 @@ impl NodeRay {
             let far = far_x.min(far_y).min(far_z).min(Vec4::splat(t_max));
             let mask = near.cmple(far).bitmask();
             for j in 0..4 {
-                if mask & (1 << j) != 0 {
-                    let child = 4 * half + j;
-                    let bits = ((child_bits8 >> (8 * child)) & 0xFF) as u32;
-                    let index = ((bit_index8 >> (8 * child)) & 0xFF) as u32;
-                    hit_mask |= bits << index;
-                }
+                // Branch-free: box hits are unpredictable.
+                let keep = ((mask >> j) & 1).wrapping_neg();
+                let child = 4 * half + j as usize;
+                let bits = ((child_bits8 >> (8 * child)) & 0xFF) as u32;
+                let index = ((bit_index8 >> (8 * child)) & 0xFF) as u32;
+                hit_mask |= (bits << index) & keep;
             }
         }
         hit_mask
