@@ -1,6 +1,147 @@
-//! Placeholder: being written.
+//! Scene files: OBJ, PLY, glTF 2.0 / GLB meshes and the TOML scene description (SPEC §7).
+//!
+//! The format follows the extension (case-insensitive): `.obj`, `.ply`, `.gltf`, `.glb`,
+//! `.toml`. A mesh file gives triangles, and a glTF file may also give a camera and a spot
+//! light; what a file lacks is filled in from its bounds ([`framing_camera`],
+//! [`default_display_scale`]). Only positions and faces are read: normals, texture
+//! coordinates and materials play no part in H (surfaces are diffuse and two-sided, SPEC §1).
+//!
+//! Every error is an [`Error::File`] naming the file, and the line where the format has
+//! lines. Loaders never panic on bad input: where a parsing crate can panic on malformed
+//! data, the call is guarded and the panic turned into an error.
+
+mod gltf;
+mod obj;
+mod ply;
+mod toml;
+
 use std::path::Path;
-use crate::{error::{Error, Result}, scene::Scene};
+
+use crate::error::{Error, Result};
+use crate::scene::{default_display_scale, framing_camera, Camera, Mesh, Scene, SpotLight};
+
+/// What a mesh file holds: its triangles, and the camera and spot light where the format can
+/// carry them (glTF). Positions are in the file's world space (node transforms applied).
+#[derive(Clone, Debug, Default)]
+pub struct MeshFile {
+    pub mesh: Mesh,
+    pub camera: Option<Camera>,
+    pub light: Option<SpotLight>,
+}
+
+/// The file formats hmdist reads, by extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Format {
+    Obj,
+    Ply,
+    Gltf,
+    SceneToml,
+}
+
+fn format_of(path: &Path) -> Result<Format> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    match ext.as_str() {
+        "obj" => Ok(Format::Obj),
+        "ply" => Ok(Format::Ply),
+        "gltf" | "glb" => Ok(Format::Gltf),
+        "toml" => Ok(Format::SceneToml),
+        _ => {
+            let format = if ext.is_empty() {
+                "no extension".to_string()
+            } else {
+                format!("'.{ext}'")
+            };
+            let message = format!("unknown scene format {format}: expected .obj, .ply, .gltf, .glb or .toml");
+            Err(Error::file(path, message))
+        }
+    }
+}
+
+/// Loads a scene file: a mesh file (with a framing camera unless it carries one) or a TOML
+/// scene description. The result passes [`Scene::validate`].
 pub fn load_file(path: &Path) -> Result<Scene> {
-    Err(Error::file(path, "loaders not yet written"))
+    let scene = match format_of(path)? {
+        Format::SceneToml => toml::load_scene(path)?,
+        _ => {
+            let file = load_mesh(path)?;
+            let bounds = file.mesh.bounds();
+            Scene {
+                name: file_name(path),
+                camera: file.camera.unwrap_or_else(|| framing_camera(bounds)),
+                light: file.light,
+                display_scale: default_display_scale(bounds),
+                mesh: file.mesh,
+            }
+        }
+    };
+    scene.validate().map_err(|e| in_file(path, e))?;
+    Ok(scene)
+}
+
+/// Loads a mesh file (OBJ, PLY, glTF/GLB). The mesh is checked: it has triangles, every
+/// index is in range and every used vertex is finite.
+pub fn load_mesh(path: &Path) -> Result<MeshFile> {
+    let file = match format_of(path)? {
+        Format::Obj => obj::load(path)?,
+        Format::Ply => ply::load(path)?,
+        Format::Gltf => gltf::load(path)?,
+        Format::SceneToml => {
+            return Err(Error::file(
+                path,
+                "a TOML scene description cannot be used as a mesh: expected .obj, .ply, .gltf or .glb",
+            ))
+        }
+    };
+    file.mesh.validate().map_err(|e| in_file(path, e))?;
+    Ok(file)
+}
+
+/// The name a scene loaded from `path` goes by in reports: its file name.
+fn file_name(path: &Path) -> String {
+    path.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| path.display().to_string())
+}
+
+/// Reads the whole file, with the error phrased for a person.
+fn read_bytes(path: &Path) -> Result<Vec<u8>> {
+    std::fs::read(path).map_err(|e| Error::io(path, "read", e))
+}
+
+/// Turns a geometry error ("the scene has no triangles") into one that names the file.
+fn in_file(path: &Path, err: Error) -> Error {
+    match err {
+        Error::Scene(message) => Error::file(path, message),
+        other => other,
+    }
+}
+
+/// The 1-based line of byte `offset` in `text`.
+fn line_of_offset(text: &[u8], offset: usize) -> usize {
+    1 + text[..offset.min(text.len())]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+}
+
+/// Runs code of a parsing crate that can panic on malformed input, turning a panic into an
+/// error on `path`. (The panic hook still prints the panic's message first: a library must
+/// not replace the process-wide hook.) Nothing the closure touches outlives a panic, so
+/// asserting unwind safety is sound.
+fn guarded<T>(path: &Path, parse: impl FnOnce() -> Result<T>) -> Result<T> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(parse)).unwrap_or_else(|panic| {
+        let what = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown error".to_string());
+        Err(Error::file(
+            path,
+            format!("malformed file (the parser failed: {what})"),
+        ))
+    })
 }
