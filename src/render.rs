@@ -183,7 +183,7 @@ pub fn primary_hits(accel: &impl RayCaster, scene: &Scene, width: u32, height: u
         .map(|i| {
             let (x, y) = ((i % width as u64) as u32, (i / width as u64) as u32);
             let dir = camera.pixel_direction(x, y);
-            accel.closest_hit(camera.eye(), dir, f32::INFINITY).map(|mut hit| {
+            accel.closest_hit(camera.eye(), dir, f32::INFINITY, None).map(|mut hit| {
                 if hit.normal.dot(dir) > 0.0 {
                     hit.normal = -hit.normal;
                 }

@@ -83,7 +83,7 @@ impl Accel {
 
     /// Closest hit as (leaf-order primitive, t, barycentrics).
     #[inline(always)]
-    fn trace(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<(usize, f32, [f32; 3])> {
+    fn trace(&self, origin: Vec3, direction: Vec3, t_max: f32, leaving: Option<u32>) -> Option<(usize, f32, [f32; 3])> {
         let ray = WatertightRay::new(origin, direction);
         let node_ray = NodeRay::new(origin, direction);
         let mut t_max = t_max;
@@ -98,7 +98,9 @@ impl Accel {
             {
                 let id = state.primitive_id as usize;
                 let [p0, p1, p2] = self.corners[id];
-                if let Some(hit) = ray.intersect(p0, p1, p2, t_max) {
+                let hit = ray.intersect(p0, p1, p2, t_max);
+                // A hit within its t error bound is rejected only on the triangle the ray leaves.
+                if let Some(hit) = hit.filter(|h| !h.within_error || leaving != Some(self.mesh_index[id])) {
                     t_max = hit.t;
                     best = Some((id, hit.t, hit.b));
                 }
@@ -194,8 +196,8 @@ fn dequantize(q: &[u8; 8]) -> [Vec4; 2] {
 }
 
 impl RayCaster for Accel {
-    fn closest_hit(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<Hit> {
-        let (id, t, b) = self.trace(origin, direction, t_max)?;
+    fn closest_hit(&self, origin: Vec3, direction: Vec3, t_max: f32, leaving: Option<u32>) -> Option<Hit> {
+        let (id, t, b) = self.trace(origin, direction, t_max, leaving)?;
         let p = self.corners[id].map(Vec3::from);
         let point = b[0] * p[0] + b[1] * p[1] + b[2] * p[2];
         Some(Hit {
@@ -208,7 +210,7 @@ impl RayCaster for Accel {
     }
 
     #[inline]
-    fn hit_distance(&self, origin: Vec3, direction: Vec3, t_max: f32) -> f32 {
-        self.trace(origin, direction, t_max).map_or(f32::INFINITY, |(_, t, _)| t)
+    fn hit_distance(&self, origin: Vec3, direction: Vec3, t_max: f32, leaving: Option<u32>) -> f32 {
+        self.trace(origin, direction, t_max, leaving).map_or(f32::INFINITY, |(_, t, _)| t)
     }
 }

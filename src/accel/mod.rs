@@ -5,8 +5,9 @@
 //!   ([`triangle`]), and BVH boxes are tested conservatively ([`bvh`]). In a closed room no
 //!   ray escapes.
 //! - **Robust origins**: a ray leaving a surface starts at [`offset_ray_origin`] of the hit,
-//!   and a triangle hit closer than its own `t` error bound is rejected, so a ray never re-hits
-//!   the surface it leaves, and near-horizon hits in concave places are kept.
+//!   and a hit on the triangle it leaves is rejected when closer than its own `t` error bound,
+//!   so a ray never re-hits the surface it leaves, and near-horizon hits in concave places
+//!   (and a second wall a few ulps away in a corner) are kept.
 //!
 //! The interface is [`RayCaster`]: no per-ray allocation and no dynamic dispatch; estimators
 //! are generic over it. [`Accel`] is the implementation (obvhs's compressed wide BVH).
@@ -46,9 +47,10 @@ impl Hit {
 
 /// What estimators need from ray casting.
 pub trait RayCaster: Sync {
-    /// The first hit along `origin + t·direction`, `0 < t < t_max`.
-    fn closest_hit(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<Hit>;
+    /// The first hit along `origin + t·direction`, `0 < t < t_max`. `leaving` is the triangle
+    /// the ray leaves (its origin from [`Hit::spawn_origin`]), `None` for camera rays.
+    fn closest_hit(&self, origin: Vec3, direction: Vec3, t_max: f32, leaving: Option<u32>) -> Option<Hit>;
 
     /// Distance to the first hit, `+inf` if the ray escapes (cheaper than `closest_hit`).
-    fn hit_distance(&self, origin: Vec3, direction: Vec3, t_max: f32) -> f32;
+    fn hit_distance(&self, origin: Vec3, direction: Vec3, t_max: f32, leaving: Option<u32>) -> f32;
 }

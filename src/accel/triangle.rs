@@ -8,8 +8,11 @@
 //! the two triangles get exactly negated values, so one of them is hit. Exact zeros are
 //! re-evaluated in f64. Surfaces are two-sided: both windings are accepted.
 //!
-//! A hit closer than the error bound of its own `t` is rejected (pbrt-v4), so a ray leaving a
-//! surface from a robustly offset origin cannot re-hit it.
+//! A hit closer than the error bound of its own `t` is flagged `within_error`: its sign cannot
+//! be trusted. The caller rejects such a hit on the triangle the ray leaves (pbrt-v4's guard
+//! against self-intersection) and keeps it on any other triangle: a point a few ulps from a
+//! second wall (a room's corner) really does see that wall at a tiny distance, and rejecting
+//! the hit would let the ray leak out of a closed room.
 
 use glam::{Vec3, Vec3A};
 
@@ -33,6 +36,8 @@ pub struct WatertightRay {
 pub struct TriangleHit {
     pub t: f32,
     pub b: [f32; 3],
+    /// `t` is within its own error bound (pbrt-v4 §6.8.7): the hit may be behind the origin.
+    pub within_error: bool,
 }
 
 impl WatertightRay {
@@ -96,7 +101,7 @@ impl WatertightRay {
         let inv_det = 1.0 / det;
         let t = t_scaled * inv_det;
 
-        // Reject t within its own error bound (pbrt-v4 §6.8.7).
+        // The error bound of t (pbrt-v4 §6.8.7).
         let max_zt = az.abs().max(bz.abs()).max(cz.abs());
         let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
         let max_yt = ay.abs().max(by.abs()).max(cy.abs());
@@ -107,12 +112,10 @@ impl WatertightRay {
         let max_e = e0.abs().max(e1.abs()).max(e2.abs());
         let delta_t =
             3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
-        if t <= delta_t {
-            return None;
-        }
         Some(TriangleHit {
             t,
             b: [e0 * inv_det, e1 * inv_det, e2 * inv_det],
+            within_error: t <= delta_t,
         })
     }
 }
@@ -160,10 +163,10 @@ mod tests {
     }
 
     #[test]
-    fn a_ray_leaving_a_triangle_from_its_surface_does_not_rehit_it() {
+    fn a_ray_leaving_a_triangle_from_its_surface_cannot_trust_a_rehit() {
         let (a, b, c) = (v(0.0, 0.0, 3.0), v(7.0, 1.0, 3.0), v(1.0, 5.0, 3.1));
         let p = 0.3 * a + 0.3 * b + 0.4 * c;
         let ray = WatertightRay::new(p.into(), Vec3::new(0.9, 0.1, 0.05));
-        assert!(ray.intersect(a, b, c, f32::INFINITY).is_none());
+        assert!(ray.intersect(a, b, c, f32::INFINITY).is_none_or(|hit| hit.within_error));
     }
 }

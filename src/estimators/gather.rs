@@ -53,7 +53,7 @@ impl Gather {
         let mut escaped = 0;
         for j in 0..self.rays {
             let dir = self.direction(&frame, grid, context.seed, pixel, j);
-            let d = accel.hit_distance(origin, dir, context.clamp.max);
+            let d = accel.hit_distance(origin, dir, context.clamp.max, Some(hit.triangle));
             escaped += d.is_infinite() as u32;
             mean.add(d, context.clamp);
         }
