@@ -67,7 +67,7 @@ fn a_different_seed_gives_a_different_image() {
 fn a_point_a_few_ulps_from_a_second_wall_still_sees_that_wall() {
     // Found in `cube` at 640×480: a primary hit on the back wall 1.4e-6 from the right wall.
     // Gather rays towards the right wall hit it within their t error bound; rejecting such
-    // hits (pbrt-v4's self-intersection guard) let 14 of 64 rays escape the closed room.
+    // hits outright (pbrt-v4's self-intersection guard) let 14 of 64 rays escape the room.
     let scene = Scene::load("cube").unwrap();
     let (_, report) = common::gather(&scene, 640, 480, 16, Weighting::Cosine, None);
     assert_eq!(report["escaped_rays"], 0);

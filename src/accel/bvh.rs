@@ -88,6 +88,9 @@ impl Accel {
         let node_ray = NodeRay::new(origin, direction);
         let mut t_max = t_max;
         let mut best: Option<(usize, f32, [f32; 3])> = None;
+        // The nearest hit within its own t error bound on another triangle: taken only if
+        // the ray would otherwise escape (see `RayCaster`).
+        let mut within_error: Option<(usize, f32, [f32; 3])> = None;
         let mut state = self.bvh.new_traversal(direction.into());
         let mut node;
         obvhs::traverse!(
@@ -98,15 +101,21 @@ impl Accel {
             {
                 let id = state.primitive_id as usize;
                 let [p0, p1, p2] = self.corners[id];
-                let hit = ray.intersect(p0, p1, p2, t_max);
-                // A hit within its t error bound is rejected only on the triangle the ray leaves.
-                if let Some(hit) = hit.filter(|h| !h.within_error || leaving != Some(self.mesh_index[id])) {
-                    t_max = hit.t;
-                    best = Some((id, hit.t, hit.b));
+                match ray.intersect(p0, p1, p2, t_max) {
+                    Some(hit) if !hit.within_error => {
+                        t_max = hit.t;
+                        best = Some((id, hit.t, hit.b));
+                    }
+                    Some(hit) if leaving != Some(self.mesh_index[id]) => {
+                        if within_error.is_none_or(|(_, t, _)| hit.t < t) {
+                            within_error = Some((id, hit.t, hit.b));
+                        }
+                    }
+                    _ => {}
                 }
             }
         );
-        best
+        best.or(within_error)
     }
 }
 

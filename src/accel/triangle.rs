@@ -9,10 +9,7 @@
 //! re-evaluated in f64. Surfaces are two-sided: both windings are accepted.
 //!
 //! A hit closer than the error bound of its own `t` is flagged `within_error`: its sign cannot
-//! be trusted. The caller rejects such a hit on the triangle the ray leaves (pbrt-v4's guard
-//! against self-intersection) and keeps it on any other triangle: a point a few ulps from a
-//! second wall (a room's corner) really does see that wall at a tiny distance, and rejecting
-//! the hit would let the ray leak out of a closed room.
+//! be trusted (pbrt-v4 rejects such hits; see [`super::bvh`] for what we do with them).
 
 use glam::{Vec3, Vec3A};
 
