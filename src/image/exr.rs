@@ -16,7 +16,13 @@ pub fn write(image: &HmdImage, path: &Path) -> Result<()> {
     let layer = Layer::new(
         (image.width as usize, image.height as usize),
         LayerAttributes::named("hmd"),
-        Encoding::FAST_LOSSLESS,
+        // Scan lines in increasing order: the file's bytes depend only on the pixels, not on
+        // which compression thread finished first (exr's default order is unspecified).
+        Encoding {
+            compression: Compression::ZIP16,
+            blocks: Blocks::ScanLines,
+            line_order: LineOrder::Increasing,
+        },
         AnyChannels::sort(SmallVec::from_elem(channel, 1)),
     );
     let mut bytes = Cursor::new(Vec::new());
