@@ -16,7 +16,10 @@ use hmdist::scene::Scene;
 
 fn main() {
     let scenes = std::env::var("HMDIST_BENCH_SCENES").unwrap_or_else(|_| "cube,hall".into());
-    let size: u32 = std::env::var("HMDIST_BENCH_SIZE").ok().and_then(|s| s.parse().ok()).unwrap_or(256);
+    let size: u32 = std::env::var("HMDIST_BENCH_SIZE")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(256);
     let rays = 256;
     println!("scene  triangles  preset  build_s  threads  Mrays/s  escaped");
     for name in scenes.split(',') {
@@ -35,9 +38,14 @@ fn main() {
             let gather = Gather::new(rays, Weighting::Cosine).unwrap();
             let all = rayon::current_num_threads();
             for threads in [all, 1] {
-                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
                 let start = Instant::now();
-                let estimate = pool.install(|| gather.estimate(&context, &gbuffer, &Silent)).unwrap();
+                let estimate = pool
+                    .install(|| gather.estimate(&context, &gbuffer, &Silent))
+                    .unwrap();
                 let seconds = start.elapsed().as_secs_f64();
                 println!(
                     "{name:<6} {:>9}  {:<6} {build:>7.2}  {threads:>7}  {:>7.2}  {:>7}",

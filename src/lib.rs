@@ -1,8 +1,8 @@
-pub mod error;
-pub mod scene;
 pub mod accel;
-pub mod sampling;
+pub mod error;
 pub mod estimators;
-pub mod progress;
 pub mod image;
+pub mod progress;
 pub mod render;
+pub mod sampling;
+pub mod scene;

@@ -63,8 +63,10 @@ impl RenderOptions {
             )));
         }
         if let Some(d) = self.max_distance {
-            if !(d > 0.0) {
-                return Err(Error::parameter(format!("--max-distance must be positive, not {d}")));
+            if d.is_nan() || d <= 0.0 {
+                return Err(Error::parameter(format!(
+                    "--max-distance must be positive, not {d}"
+                )));
             }
         }
         if self.threads == Some(0) {
@@ -183,12 +185,14 @@ pub fn primary_hits(accel: &impl RayCaster, scene: &Scene, width: u32, height: u
         .map(|i| {
             let (x, y) = ((i % width as u64) as u32, (i / width as u64) as u32);
             let dir = camera.pixel_direction(x, y);
-            accel.closest_hit(camera.eye(), dir, f32::INFINITY, None).map(|mut hit| {
-                if hit.normal.dot(dir) > 0.0 {
-                    hit.normal = -hit.normal;
-                }
-                hit
-            })
+            accel
+                .closest_hit(camera.eye(), dir, f32::INFINITY, None)
+                .map(|mut hit| {
+                    if hit.normal.dot(dir) > 0.0 {
+                        hit.normal = -hit.normal;
+                    }
+                    hit
+                })
         })
         .collect();
     GBuffer {

@@ -59,7 +59,7 @@ pub fn random_pair(seed: u64, stream: u64, counter: u64) -> Vec2 {
 /// `a ≤ b` (`a = b = √n` for perfect squares). A prime `n` gives `1 × n`.
 pub fn strata(n: u32) -> (u32, u32) {
     let mut a = (n as f64).sqrt() as u32;
-    while a > 1 && n % a != 0 {
+    while a > 1 && !n.is_multiple_of(a) {
         a -= 1;
     }
     let a = a.max(1);
@@ -137,7 +137,7 @@ mod tests {
     #[test]
     fn stratified_points_fill_each_stratum_once() {
         let (a, b) = strata(24);
-        let mut seen = vec![0; 24];
+        let mut seen = [0; 24];
         for j in 0..24 {
             let u = stratified(j, (a, b), random_pair(1, 2, j as u64));
             seen[((u.y * b as f32) as u32 * a + (u.x * a as f32) as u32) as usize] += 1;
@@ -171,7 +171,12 @@ mod tests {
 
     #[test]
     fn frame_is_orthonormal() {
-        for n in [Vec3::Z, -Vec3::Z, Vec3::new(0.3, -0.5, 0.8).normalize(), Vec3::new(0.0, 0.0, -0.9999).normalize()] {
+        for n in [
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::new(0.3, -0.5, 0.8).normalize(),
+            Vec3::new(0.0, 0.0, -0.9999).normalize(),
+        ] {
             let f = Frame::from_normal(n);
             assert!(f.t.dot(f.b).abs() < 1e-5 && f.t.dot(n).abs() < 1e-5 && f.b.dot(n).abs() < 1e-5);
             assert!((f.t.length() - 1.0).abs() < 1e-5 && (f.b.length() - 1.0).abs() < 1e-5);

@@ -39,14 +39,22 @@ fn refuses(case: &str, files: &[(&str, &[u8])], args: &[&str], message: &str) {
     }
     let out = hmdist(&dir, args);
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{case}: exit status, stderr: {stderr}");
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "{case}: exit status, stderr: {stderr}"
+    );
     assert!(!stderr.contains("panicked"), "{case}: panicked: {stderr}");
     assert!(
         stderr.to_lowercase().contains(&message.to_lowercase()),
         "{case}: message should mention '{message}', got: {stderr}"
     );
     let names: Vec<&str> = files.iter().map(|(n, _)| *n).collect();
-    assert!(outputs(&dir, &names).is_empty(), "{case}: left files behind: {:?}", outputs(&dir, &names));
+    assert!(
+        outputs(&dir, &names).is_empty(),
+        "{case}: left files behind: {:?}",
+        outputs(&dir, &names)
+    );
 }
 
 const TINY: [&str; 4] = ["--size", "8x8", "--rays", "4"];
@@ -63,37 +71,123 @@ fn bad_parameters_exit_2_with_a_message_and_no_output() {
     refuses("size0", &[], &["render", "--size", "0x0"], "0x0");
     refuses("sizegarbage", &[], &["render", "--size", "big"], "WIDTHxHEIGHT");
     refuses("rays0", &[], &["render", "--rays", "0"], "--rays");
-    refuses("maxdist", &[], &render_args(&["--max-distance=-1"]), "--max-distance");
+    refuses(
+        "maxdist",
+        &[],
+        &render_args(&["--max-distance=-1"]),
+        "--max-distance",
+    );
     refuses("threads0", &[], &render_args(&["--threads", "0"]), "--threads");
     refuses("method", &[], &render_args(&["--method", "magic"]), "magic");
 }
 
 #[test]
 fn unreadable_and_unwritable_paths_exit_2() {
-    refuses("missing", &[], &render_args(&["--scene", "missing.obj"]), "missing.obj");
-    refuses("unknown-format", &[("scene.xyz", b"hello")], &render_args(&["--scene", "scene.xyz"]), "scene.xyz");
-    refuses("unwritable", &[], &render_args(&["--out", "no/such/folder/hmd.exr"]), "hmd");
-    refuses("export-unwritable", &[], &["scene", "export", "sphere", "no/such/folder/s.obj"], "s.obj");
+    refuses(
+        "missing",
+        &[],
+        &render_args(&["--scene", "missing.obj"]),
+        "missing.obj",
+    );
+    refuses(
+        "unknown-format",
+        &[("scene.xyz", b"hello")],
+        &render_args(&["--scene", "scene.xyz"]),
+        "scene.xyz",
+    );
+    refuses(
+        "unwritable",
+        &[],
+        &render_args(&["--out", "no/such/folder/hmd.exr"]),
+        "hmd",
+    );
+    refuses(
+        "export-unwritable",
+        &[],
+        &["scene", "export", "sphere", "no/such/folder/s.obj"],
+        "s.obj",
+    );
 }
 
 #[test]
 fn broken_scene_files_exit_2_naming_the_file() {
     let quad = b"v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n";
-    refuses("obj-garbage", &[("bad.obj", b"v 0 0 0\nv 1 zero 0\nv 1 1 0\nf 1 2 3\n")], &render_args(&["--scene", "bad.obj"]), "bad.obj:2");
-    refuses("obj-index", &[("bad.obj", b"v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 9\n")], &render_args(&["--scene", "bad.obj"]), "bad.obj");
-    refuses("obj-nan", &[("nan.obj", b"v 0 0 0\nv nan 0 0\nv 1 1 0\nf 1 2 3\n")], &render_args(&["--scene", "nan.obj"]), "not finite");
-    refuses("obj-inf", &[("inf.obj", b"v 0 0 0\nv inf 0 0\nv 1 1 0\nf 1 2 3\n")], &render_args(&["--scene", "inf.obj"]), "not finite");
-    refuses("obj-empty", &[("empty.obj", b"# nothing\nv 0 0 0\n")], &render_args(&["--scene", "empty.obj"]), "no triangles");
+    refuses(
+        "obj-garbage",
+        &[("bad.obj", b"v 0 0 0\nv 1 zero 0\nv 1 1 0\nf 1 2 3\n")],
+        &render_args(&["--scene", "bad.obj"]),
+        "bad.obj:2",
+    );
+    refuses(
+        "obj-index",
+        &[("bad.obj", b"v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 9\n")],
+        &render_args(&["--scene", "bad.obj"]),
+        "bad.obj",
+    );
+    refuses(
+        "obj-nan",
+        &[("nan.obj", b"v 0 0 0\nv nan 0 0\nv 1 1 0\nf 1 2 3\n")],
+        &render_args(&["--scene", "nan.obj"]),
+        "not finite",
+    );
+    refuses(
+        "obj-inf",
+        &[("inf.obj", b"v 0 0 0\nv inf 0 0\nv 1 1 0\nf 1 2 3\n")],
+        &render_args(&["--scene", "inf.obj"]),
+        "not finite",
+    );
+    refuses(
+        "obj-empty",
+        &[("empty.obj", b"# nothing\nv 0 0 0\n")],
+        &render_args(&["--scene", "empty.obj"]),
+        "no triangles",
+    );
     refuses("ply-truncated", &[("t.ply", b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n")], &render_args(&["--scene", "t.ply"]), "t.ply");
-    refuses("gltf-garbage", &[("g.gltf", b"{ this is not json")], &render_args(&["--scene", "g.gltf"]), "g.gltf");
-    refuses("glb-garbage", &[("g.glb", b"glTF\x02\x00\x00\x00garbage")], &render_args(&["--scene", "g.glb"]), "g.glb");
-    refuses("toml-typo", &[("quad.obj", quad), ("s.toml", b"[[mesh]]\npath = \"quad.obj\"\ntranslat = [0, 0, 0]\n")], &render_args(&["--scene", "s.toml"]), "s.toml");
-    refuses("toml-missing-mesh", &[("s.toml", b"[[mesh]]\npath = \"nowhere.obj\"\n")], &render_args(&["--scene", "s.toml"]), "nowhere.obj");
-    refuses("toml-garbage", &[("s.toml", b"[[mesh]\npath = \n")], &render_args(&["--scene", "s.toml"]), "s.toml");
+    refuses(
+        "gltf-garbage",
+        &[("g.gltf", b"{ this is not json")],
+        &render_args(&["--scene", "g.gltf"]),
+        "g.gltf",
+    );
+    refuses(
+        "glb-garbage",
+        &[("g.glb", b"glTF\x02\x00\x00\x00garbage")],
+        &render_args(&["--scene", "g.glb"]),
+        "g.glb",
+    );
+    refuses(
+        "toml-typo",
+        &[
+            ("quad.obj", quad),
+            ("s.toml", b"[[mesh]]\npath = \"quad.obj\"\ntranslat = [0, 0, 0]\n"),
+        ],
+        &render_args(&["--scene", "s.toml"]),
+        "s.toml",
+    );
+    refuses(
+        "toml-missing-mesh",
+        &[("s.toml", b"[[mesh]]\npath = \"nowhere.obj\"\n")],
+        &render_args(&["--scene", "s.toml"]),
+        "nowhere.obj",
+    );
+    refuses(
+        "toml-garbage",
+        &[("s.toml", b"[[mesh]\npath = \n")],
+        &render_args(&["--scene", "s.toml"]),
+        "s.toml",
+    );
 }
 
 /// SPEC §2's ray direction for pixel (px, py), computed here in f64, independently of hmdist.
-fn spec_direction(eye: DVec3, target: DVec3, up: DVec3, fov_deg: f64, (w, h): (u32, u32), px: u32, py: u32) -> DVec3 {
+fn spec_direction(
+    eye: DVec3,
+    target: DVec3,
+    up: DVec3,
+    fov_deg: f64,
+    (w, h): (u32, u32),
+    px: u32,
+    py: u32,
+) -> DVec3 {
     let f = (target - eye).normalize();
     let r = f.cross(up).normalize();
     let u = r.cross(f);
@@ -110,7 +204,10 @@ fn toml_scene_follows_the_spec_camera_convention_pixel_for_pixel() {
     // camera's orientation, handedness, aspect or pixel centres differ in the least.
     let dir = workdir("camera");
     let n = DVec3::new(0.3, 1.0, 0.2).normalize();
-    let (a, b) = (n.cross(DVec3::Z).normalize(), n.cross(n.cross(DVec3::Z)).normalize());
+    let (a, b) = (
+        n.cross(DVec3::Z).normalize(),
+        n.cross(n.cross(DVec3::Z)).normalize(),
+    );
     let s = 1.0e4;
     let corners: Vec<DVec3> = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
         .iter()
@@ -122,14 +219,33 @@ fn toml_scene_follows_the_spec_camera_convention_pixel_for_pixel() {
     }
     obj += "f 1 2 3\nf 1 3 4\n";
     std::fs::write(dir.join("plane.obj"), obj).unwrap();
-    let (eye, target, up, fov) = (DVec3::new(1.0, 3.0, 2.0), DVec3::new(-4.0, 1.5, -6.0), DVec3::new(0.1, 1.0, 0.0), 70.0);
+    let (eye, target, up, fov) = (
+        DVec3::new(1.0, 3.0, 2.0),
+        DVec3::new(-4.0, 1.5, -6.0),
+        DVec3::new(0.1, 1.0, 0.0),
+        70.0,
+    );
     let toml = format!(
         "[[mesh]]\npath = \"plane.obj\"\n[camera]\neye = [{}, {}, {}]\ntarget = [{}, {}, {}]\nup = [{}, {}, {}]\nfov_y_deg = {fov}\n",
         eye.x, eye.y, eye.z, target.x, target.y, target.z, up.x, up.y, up.z
     );
     std::fs::write(dir.join("scene.toml"), toml).unwrap();
     let size = (96, 64);
-    let out = hmdist(&dir, &["render", "--quiet", "--scene", "scene.toml", "--size", "96x64", "--rays", "1", "--out", "plane.exr"]);
+    let out = hmdist(
+        &dir,
+        &[
+            "render",
+            "--quiet",
+            "--scene",
+            "scene.toml",
+            "--size",
+            "96x64",
+            "--rays",
+            "1",
+            "--out",
+            "plane.exr",
+        ],
+    );
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let image = hmdist::image::exr::read(&dir.join("plane.exr")).unwrap();
     assert_eq!((image.width, image.height), size);
@@ -148,7 +264,10 @@ fn toml_scene_follows_the_spec_camera_convention_pixel_for_pixel() {
             hits += hit as u32;
         }
     }
-    assert!(hits > 500 && checked - hits > 500, "the horizon crosses the image: {hits} of {checked}");
+    assert!(
+        hits > 500 && checked - hits > 500,
+        "the horizon crosses the image: {hits} of {checked}"
+    );
 }
 
 #[test]
@@ -159,14 +278,30 @@ fn render_writes_exr_png_and_json_with_the_spec_keys() {
     let mut files = outputs(&dir, &[]);
     files.sort();
     assert_eq!(files, ["hmd.exr", "hmd.json", "hmd.png"]);
-    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("hmd.json")).unwrap()).unwrap();
-    for key in ["method", "width", "height", "seed", "rays", "triangles", "l_diag", "background_pixels", "rays_cast", "escaped_rays", "mrays_per_s"] {
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("hmd.json")).unwrap()).unwrap();
+    for key in [
+        "method",
+        "width",
+        "height",
+        "seed",
+        "rays",
+        "triangles",
+        "l_diag",
+        "background_pixels",
+        "rays_cast",
+        "escaped_rays",
+        "mrays_per_s",
+    ] {
         assert!(report.get(key).is_some(), "JSON lacks '{key}'");
     }
     for key in ["load", "accel_build", "primary", "estimate", "total"] {
         assert!(report["seconds"][key].is_number(), "JSON lacks seconds.{key}");
     }
-    assert_eq!(report["rays_cast"], 8 * 8 * 4 - 4 * report["background_pixels"].as_u64().unwrap());
+    assert_eq!(
+        report["rays_cast"],
+        8 * 8 * 4 - 4 * report["background_pixels"].as_u64().unwrap()
+    );
 }
 
 #[test]
@@ -174,9 +309,28 @@ fn same_exr_bytes_with_1_and_2_threads() {
     let dir = workdir("threads");
     for t in ["1", "2"] {
         let exr = format!("t{t}.exr");
-        let out = hmdist(&dir, &["render", "--quiet", "--scene", "cube", "--size", "200x150", "--rays", "4", "--threads", t, "--out", &exr]);
+        let out = hmdist(
+            &dir,
+            &[
+                "render",
+                "--quiet",
+                "--scene",
+                "cube",
+                "--size",
+                "200x150",
+                "--rays",
+                "4",
+                "--threads",
+                t,
+                "--out",
+                &exr,
+            ],
+        );
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     }
-    let (one, two) = (std::fs::read(dir.join("t1.exr")).unwrap(), std::fs::read(dir.join("t2.exr")).unwrap());
+    let (one, two) = (
+        std::fs::read(dir.join("t1.exr")).unwrap(),
+        std::fs::read(dir.join("t2.exr")).unwrap(),
+    );
     assert!(one == two, "EXR bytes differ between 1 and 2 threads");
 }

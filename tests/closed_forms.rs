@@ -21,7 +21,10 @@ fn inside_a_closed_sphere_cosine_gather_is_unbiased() {
     let median_h_over_r = median(h.iter().map(|h| h / r as f64).collect());
     println!("mean R/H = {mean_r_over_h:.5}, median H/R = {median_h_over_r:.5}");
     assert!((mean_r_over_h - 1.0).abs() < 0.005, "mean R/H = {mean_r_over_h}");
-    assert!((median_h_over_r - 1.0).abs() < 0.01, "median H/R = {median_h_over_r}");
+    assert!(
+        (median_h_over_r - 1.0).abs() < 0.01,
+        "median H/R = {median_h_over_r}"
+    );
 }
 
 #[test]
@@ -33,7 +36,10 @@ fn slab_gives_three_halves_height_under_cosine_weighting_and_twice_under_uniform
         let (image, _) = gather(&scene, 1, 1, 65_536, weighting, None);
         let got = image.data[0];
         println!("{weighting:?}: H = {got}, expected {expected}");
-        assert!((got / expected - 1.0).abs() < 0.005, "{weighting:?}: H = {got}, expected {expected}");
+        assert!(
+            (got / expected - 1.0).abs() < 0.005,
+            "{weighting:?}: H = {got}, expected {expected}"
+        );
     }
 }
 
@@ -46,6 +52,9 @@ fn at_the_centre_of_a_domes_floor_h_is_the_radius() {
         let got = image.data[0];
         println!("{weighting:?}: H = {got}, expected {r}");
         assert_eq!(report["escaped_rays"], 0, "the dome is closed");
-        assert!((got / r - 1.0).abs() < 0.005, "{weighting:?}: H = {got}, expected {r}");
+        assert!(
+            (got / r - 1.0).abs() < 0.005,
+            "{weighting:?}: H = {got}, expected {r}"
+        );
     }
 }

@@ -15,7 +15,11 @@ fn rays_aimed_exactly_at_shared_vertices_and_edges_of_a_closed_mesh_all_hit() {
     let mesh = icosphere(3, Vec3::new(0.3, -0.2, 0.1), 2.0);
     for quality in [BuildQuality::Fast, BuildQuality::High] {
         let accel = Accel::build(&mesh, quality);
-        for origin in [Vec3::new(0.3, -0.2, 0.1), Vec3::new(0.9, 0.4, -0.5), Vec3::new(-1.2, -0.9, 0.7)] {
+        for origin in [
+            Vec3::new(0.3, -0.2, 0.1),
+            Vec3::new(0.9, 0.4, -0.5),
+            Vec3::new(-1.2, -0.9, 0.7),
+        ] {
             let mut targets: Vec<Vec3> = mesh.positions.clone();
             for t in &mesh.indices {
                 for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
@@ -25,9 +29,18 @@ fn rays_aimed_exactly_at_shared_vertices_and_edges_of_a_closed_mesh_all_hit() {
             }
             let misses = targets
                 .iter()
-                .filter(|&&p| accel.closest_hit(origin, (p - origin).normalize(), f32::INFINITY, None).is_none())
+                .filter(|&&p| {
+                    accel
+                        .closest_hit(origin, (p - origin).normalize(), f32::INFINITY, None)
+                        .is_none()
+                })
                 .count();
-            assert_eq!(misses, 0, "{quality:?} from {origin}: {misses} of {} rays escaped", targets.len());
+            assert_eq!(
+                misses,
+                0,
+                "{quality:?} from {origin}: {misses} of {} rays escaped",
+                targets.len()
+            );
         }
     }
 }
@@ -36,8 +49,14 @@ fn rays_aimed_exactly_at_shared_vertices_and_edges_of_a_closed_mesh_all_hit() {
 fn in_the_closed_cube_scene_no_gather_ray_escapes() {
     let scene = Scene::load("cube").unwrap();
     let (image, report) = common::gather(&scene, 128, 128, 256, Weighting::Cosine, None);
-    println!("rays cast {}, escaped {}", report["rays_cast"], report["escaped_rays"]);
-    assert_eq!(report["background_pixels"], 0, "the camera is inside the closed room");
+    println!(
+        "rays cast {}, escaped {}",
+        report["rays_cast"], report["escaped_rays"]
+    );
+    assert_eq!(
+        report["background_pixels"], 0,
+        "the camera is inside the closed room"
+    );
     assert_eq!(report["rays_cast"], 128 * 128 * 256);
     assert_eq!(report["escaped_rays"], 0);
     assert!(image.data.iter().all(|h| h.is_finite() && *h > 0.0));
@@ -57,9 +76,16 @@ fn a_different_seed_gives_a_different_image() {
     // Guards the determinism test against an estimator that ignores its random numbers.
     let scene = Scene::load("cube").unwrap();
     let (a, _) = common::gather(&scene, 16, 16, 16, Weighting::Cosine, Some(2));
-    let options = hmdist::render::RenderOptions { width: 16, height: 16, seed: 2, ..Default::default() };
+    let options = hmdist::render::RenderOptions {
+        width: 16,
+        height: 16,
+        seed: 2,
+        ..Default::default()
+    };
     let gather = hmdist::estimators::Gather::new(16, Weighting::Cosine).unwrap();
-    let b = hmdist::render::render(&scene, &gather, &options, 0.0, &hmdist::progress::Silent).unwrap().image;
+    let b = hmdist::render::render(&scene, &gather, &options, 0.0, &hmdist::progress::Silent)
+        .unwrap()
+        .image;
     assert_ne!(a.data, b.data);
 }
 

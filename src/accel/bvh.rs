@@ -83,7 +83,13 @@ impl Accel {
 
     /// Closest hit as (leaf-order primitive, t, barycentrics).
     #[inline(always)]
-    fn trace(&self, origin: Vec3, direction: Vec3, t_max: f32, leaving: Option<u32>) -> Option<(usize, f32, [f32; 3])> {
+    fn trace(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        t_max: f32,
+        leaving: Option<u32>,
+    ) -> Option<(usize, f32, [f32; 3])> {
         let ray = WatertightRay::new(origin, direction);
         let node_ray = NodeRay::new(origin, direction);
         let mut t_max = t_max;
@@ -106,10 +112,11 @@ impl Accel {
                         t_max = hit.t;
                         best = Some((id, hit.t, hit.b));
                     }
-                    Some(hit) if leaving != Some(self.mesh_index[id]) => {
-                        if within_error.is_none_or(|(_, t, _)| hit.t < t) {
-                            within_error = Some((id, hit.t, hit.b));
-                        }
+                    Some(hit)
+                        if leaving != Some(self.mesh_index[id])
+                            && within_error.is_none_or(|(_, t, _)| hit.t < t) =>
+                    {
+                        within_error = Some((id, hit.t, hit.b));
                     }
                     _ => {}
                 }
@@ -134,7 +141,11 @@ impl NodeRay {
         let safe = |d: f32| if d == 0.0 { 1e-30f32.copysign(d) } else { d };
         NodeRay {
             origin: origin.into(),
-            inv_direction: Vec3A::new(1.0 / safe(direction.x), 1.0 / safe(direction.y), 1.0 / safe(direction.z)),
+            inv_direction: Vec3A::new(
+                1.0 / safe(direction.x),
+                1.0 / safe(direction.y),
+                1.0 / safe(direction.z),
+            ),
         }
     }
 
@@ -161,7 +172,10 @@ impl NodeRay {
                 let (lo, hi) = axes[axis];
                 let t0 = lo[half] * scale[axis] + Vec4::splat(offset[axis]);
                 let t1 = hi[half] * scale[axis] + Vec4::splat(offset[axis]);
-                (t0.min(t1) - Vec4::splat(slop[axis]), t0.max(t1) + Vec4::splat(slop[axis]))
+                (
+                    t0.min(t1) - Vec4::splat(slop[axis]),
+                    t0.max(t1) + Vec4::splat(slop[axis]),
+                )
             };
             let (near_x, far_x) = slab(0);
             let (near_y, far_y) = slab(1);
@@ -220,6 +234,7 @@ impl RayCaster for Accel {
 
     #[inline]
     fn hit_distance(&self, origin: Vec3, direction: Vec3, t_max: f32, leaving: Option<u32>) -> f32 {
-        self.trace(origin, direction, t_max, leaving).map_or(f32::INFINITY, |(_, t, _)| t)
+        self.trace(origin, direction, t_max, leaving)
+            .map_or(f32::INFINITY, |(_, t, _)| t)
     }
 }

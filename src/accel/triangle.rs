@@ -107,8 +107,7 @@ impl WatertightRay {
         let delta_y = gamma(5) * (max_yt + max_zt);
         let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
         let max_e = e0.abs().max(e1.abs()).max(e2.abs());
-        let delta_t =
-            3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
+        let delta_t = 3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
         Some(TriangleHit {
             t,
             b: [e0 * inv_det, e1 * inv_det, e2 * inv_det],
@@ -135,7 +134,10 @@ mod tests {
     fn hits_both_windings_at_the_right_distance() {
         let ray = WatertightRay::new(Vec3::new(0.2, 0.2, 5.0), Vec3::new(0.0, 0.0, -1.0));
         let (a, b, c) = (v(0.0, 0.0, 1.0), v(1.0, 0.0, 1.0), v(0.0, 1.0, 1.0));
-        for hit in [ray.intersect(a, b, c, f32::INFINITY), ray.intersect(a, c, b, f32::INFINITY)] {
+        for hit in [
+            ray.intersect(a, b, c, f32::INFINITY),
+            ray.intersect(a, c, b, f32::INFINITY),
+        ] {
             let hit = hit.expect("hit");
             assert!((hit.t - 4.0).abs() < 1e-6);
             let p = hit.b[0] * a + hit.b[1] * b + hit.b[2] * c;
@@ -147,7 +149,12 @@ mod tests {
     #[test]
     fn ray_through_a_shared_edge_hits_one_of_the_two_triangles() {
         // A quad split along its diagonal; rays aimed exactly at points of the diagonal.
-        let (a, b, c, d) = (v(-1.0, -1.0, 0.0), v(1.0, -1.0, 0.0), v(1.0, 1.0, 0.0), v(-1.0, 1.0, 0.0));
+        let (a, b, c, d) = (
+            v(-1.0, -1.0, 0.0),
+            v(1.0, -1.0, 0.0),
+            v(1.0, 1.0, 0.0),
+            v(-1.0, 1.0, 0.0),
+        );
         let origin = Vec3::new(0.3, -0.7, 2.0);
         for i in 0..1000 {
             let s = -1.0 + 2.0 * i as f32 / 999.0;
@@ -164,6 +171,8 @@ mod tests {
         let (a, b, c) = (v(0.0, 0.0, 3.0), v(7.0, 1.0, 3.0), v(1.0, 5.0, 3.1));
         let p = 0.3 * a + 0.3 * b + 0.4 * c;
         let ray = WatertightRay::new(p.into(), Vec3::new(0.9, 0.1, 0.05));
-        assert!(ray.intersect(a, b, c, f32::INFINITY).is_none_or(|hit| hit.within_error));
+        assert!(ray
+            .intersect(a, b, c, f32::INFINITY)
+            .is_none_or(|hit| hit.within_error));
     }
 }

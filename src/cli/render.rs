@@ -85,7 +85,11 @@ fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT, e.g. 1024x1024"))?;
-    let parse = |v: &str| v.trim().parse::<u32>().map_err(|_| format!("'{v}' in '{s}' is not a whole number"));
+    let parse = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("'{v}' in '{s}' is not a whole number"))
+    };
     Ok((parse(w)?, parse(h)?))
 }
 
@@ -111,7 +115,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
     options.validate()?;
     if let Some(s) = args.scale {
         if !(s.is_finite() && s > 0.0) {
-            return Err(Error::parameter(format!("--scale must be a positive number, not {s}")));
+            return Err(Error::parameter(format!(
+                "--scale must be a positive number, not {s}"
+            )));
         }
     }
     let png = args.png.unwrap_or_else(|| args.out.with_extension("png"));

@@ -49,7 +49,10 @@ impl HarmonicMean {
 mod tests {
     use super::*;
 
-    const NONE: DistanceClamp = DistanceClamp { min: 0.0, max: f32::INFINITY };
+    const NONE: DistanceClamp = DistanceClamp {
+        min: 0.0,
+        max: f32::INFINITY,
+    };
 
     #[test]
     fn harmonic_mean_of_one_and_three_is_three_halves() {

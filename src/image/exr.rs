@@ -50,7 +50,11 @@ pub fn read(path: &Path) -> Result<HmdImage> {
     let channel = channels
         .iter()
         .find(|c| c.name.eq(CHANNEL))
-        .or(if channels.len() == 1 { channels.first() } else { None })
+        .or(if channels.len() == 1 {
+            channels.first()
+        } else {
+            None
+        })
         .ok_or_else(|| HmdError::file(path, "the EXR has no channel named Y"))?;
     let data: Vec<f32> = channel.sample_data.values_as_f32().collect();
     let (w, h) = (layer.size.width() as u32, layer.size.height() as u32);

@@ -23,12 +23,12 @@ pub struct HmdImage {
 
 impl HmdImage {
     pub fn new(width: u32, height: u32, data: Vec<f32>) -> Self {
-        assert_eq!(data.len(), width as usize * height as usize, "image size mismatch");
-        HmdImage {
-            width,
-            height,
-            data,
-        }
+        assert_eq!(
+            data.len(),
+            width as usize * height as usize,
+            "image size mismatch"
+        );
+        HmdImage { width, height, data }
     }
 
     pub fn at(&self, x: u32, y: u32) -> f32 {

@@ -13,7 +13,11 @@ use crate::error::{Error, Result};
 pub fn grey(image: &HmdImage, scale: f32) -> GrayImage {
     GrayImage::from_fn(image.width, image.height, |x, y| {
         let h = image.at(x, y);
-        let v = if h.is_nan() { 0.0 } else { (scale * h).clamp(0.0, 1.0) };
+        let v = if h.is_nan() {
+            0.0
+        } else {
+            (scale * h).clamp(0.0, 1.0)
+        };
         Luma([(v * 255.0).round() as u8])
     })
 }

@@ -44,7 +44,9 @@ impl Camera {
             return Err(Error::scene("the camera's eye and target are the same point"));
         }
         if f.normalize().cross(self.up).length_squared() < 1e-12 {
-            return Err(Error::scene("the camera's up vector is parallel to its view direction"));
+            return Err(Error::scene(
+                "the camera's up vector is parallel to its view direction",
+            ));
         }
         if !(self.fov_y_deg > 0.0 && self.fov_y_deg < 180.0) {
             return Err(Error::scene(format!(

@@ -78,12 +78,8 @@ impl Mesh {
     /// Appends `other` moved by `transform`.
     pub fn append_transformed(&mut self, other: &Mesh, transform: Affine3A) {
         let offset = self.positions.len() as u32;
-        self.positions.extend(
-            other
-                .positions
-                .iter()
-                .map(|&p| transform.transform_point3(p)),
-        );
+        self.positions
+            .extend(other.positions.iter().map(|&p| transform.transform_point3(p)));
         self.indices
             .extend(other.indices.iter().map(|t| t.map(|v| v + offset)));
     }
@@ -121,7 +117,10 @@ impl Mesh {
         }
         let used = {
             let mut used = vec![false; n];
-            self.indices.iter().flatten().for_each(|&v| used[v as usize] = true);
+            self.indices
+                .iter()
+                .flatten()
+                .for_each(|&v| used[v as usize] = true);
             used
         };
         if let Some((v, p)) = self

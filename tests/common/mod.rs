@@ -9,7 +9,14 @@ use hmdist::sampling::Weighting;
 use hmdist::scene::Scene;
 
 /// Renders `scene` with `rays` cosine- or uniform-weighted gather rays at `width × height`.
-pub fn gather(scene: &Scene, width: u32, height: u32, rays: u32, weighting: Weighting, threads: Option<usize>) -> (HmdImage, serde_json::Value) {
+pub fn gather(
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    rays: u32,
+    weighting: Weighting,
+    threads: Option<usize>,
+) -> (HmdImage, serde_json::Value) {
     let estimator = Gather::new(rays, weighting).unwrap();
     let options = RenderOptions {
         width,
