@@ -104,12 +104,8 @@ fn sphere_on_pedestal() -> Mesh {
 
 #[cfg(test)]
 mod tests {
-    use super::super::shapes::checks::{unshared_edges, zero_area_triangles};
+    use super::super::shapes::checks::{inside, unshared_edges, zero_area_triangles};
     use super::*;
-
-    fn inside(b: Bounds, p: Vec3) -> bool {
-        p.cmpgt(b.min).all() && p.cmplt(b.max).all()
-    }
 
     #[test]
     fn the_cube_has_about_as_many_triangles_as_scene_a() {

@@ -242,12 +242,8 @@ fn chandeliers() -> Mesh {
 
 #[cfg(test)]
 mod tests {
-    use super::super::shapes::checks::{unshared_edges, zero_area_triangles};
+    use super::super::shapes::checks::{inside, unshared_edges, zero_area_triangles};
     use super::*;
-
-    fn inside(b: Bounds, p: Vec3) -> bool {
-        p.cmpgt(b.min).all() && p.cmplt(b.max).all()
-    }
 
     #[test]
     fn the_hall_has_about_as_many_triangles_as_scene_b() {

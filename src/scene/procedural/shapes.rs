@@ -321,7 +321,14 @@ pub fn value_noise(p: Vec3, seed: u32) -> f32 {
 /// Checks on meshes that the scenes' tests share.
 #[cfg(test)]
 pub mod checks {
-    use crate::scene::Mesh;
+    use glam::Vec3;
+
+    use crate::scene::{Bounds, Mesh};
+
+    /// `p` lies strictly inside `b`.
+    pub fn inside(b: Bounds, p: Vec3) -> bool {
+        p.cmpgt(b.min).all() && p.cmplt(b.max).all()
+    }
 
     /// The edges (vertex pairs, smaller first) used by other than exactly two triangles:
     /// empty for a closed, manifold surface.
