@@ -2,6 +2,7 @@ pub mod accel;
 pub mod error;
 pub mod estimators;
 pub mod image;
+pub mod metrics;
 pub mod progress;
 pub mod render;
 pub mod sampling;

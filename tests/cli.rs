@@ -334,3 +334,31 @@ fn same_exr_bytes_with_1_and_2_threads() {
     );
     assert!(one == two, "EXR bytes differ between 1 and 2 threads");
 }
+
+#[test]
+fn bad_photon_arguments_exit_2_with_a_message_and_no_output() {
+    refuses(
+        "photons0",
+        &[],
+        &render_args(&["--method", "photon1", "--photons", "0"]),
+        "--photons",
+    );
+    refuses(
+        "gather0",
+        &[],
+        &render_args(&["--method", "photon2", "--gather", "0"]),
+        "--gather",
+    );
+    refuses(
+        "nolight",
+        &[],
+        &render_args(&["--method", "photon2", "--scene", "slab", "--photons", "10"]),
+        "no spot light",
+    );
+    refuses(
+        "huge",
+        &[],
+        &render_args(&["--method", "photon2", "--photons", "100000000000000"]),
+        "memory",
+    );
+}

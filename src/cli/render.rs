@@ -7,7 +7,8 @@ use clap::{Args, ValueEnum};
 
 use hmdist::accel::BuildQuality;
 use hmdist::error::{Error, Result};
-use hmdist::estimators::{gather, Estimator, Gather};
+use hmdist::estimators::photon::{self, PathRules, PhotonMethod, PhotonParams, SourceKind};
+use hmdist::estimators::{gather, Estimator, Gather, PhotonEstimator};
 use hmdist::image::{exr, picture, write_atomically};
 use hmdist::render::{render, RenderOptions, DEFAULT_SEED};
 use hmdist::sampling::Weighting;
@@ -23,9 +24,27 @@ pub struct RenderArgs {
     /// Estimator (SPEC §3).
     #[arg(long, value_enum, default_value_t = Method::Gather)]
     method: Method,
-    /// Gather rays per pixel N (the paper's reference is 65536).
+    /// Gather rays per pixel N, for gather (the paper's reference is 65536).
     #[arg(long, default_value_t = gather::DEFAULT_RAYS)]
     rays: u32,
+    /// Photon methods: photons stored P, exactly.
+    #[arg(long, default_value_t = photon::DEFAULT_PHOTONS, help_heading = "Photon methods")]
+    photons: usize,
+    /// Photon methods: nearest photons gathered per pixel K.
+    #[arg(long, default_value_t = photon::DEFAULT_GATHER, help_heading = "Photon methods")]
+    gather: usize,
+    /// Photon methods: where paths start.
+    #[arg(long, value_enum, default_value_t = SourceArg::Light, help_heading = "Photon methods")]
+    source: SourceArg,
+    /// Photon methods: a path ends at this many surface interactions.
+    #[arg(long, default_value_t = photon::DEFAULT_MAX_BOUNCES, help_heading = "Photon methods")]
+    max_bounces: u32,
+    /// Photon methods: probability that a path ends at each interaction.
+    #[arg(long, default_value_t = photon::DEFAULT_ABSORPTION, help_heading = "Photon methods")]
+    absorption: f32,
+    /// Photon methods: gather only within this distance of the pixel [default: no limit].
+    #[arg(long, value_name = "R", help_heading = "Photon methods")]
+    max_radius: Option<f32>,
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, default_value = "1024x1024", value_parser = parse_size)]
     size: (u32, u32),
@@ -65,6 +84,18 @@ pub struct RenderArgs {
 enum Method {
     /// Ray-traced final gathering (SPEC §3.1).
     Gather,
+    /// Photon map, method I: harmonic mean of the gathered photons' own distances (SPEC §3.3).
+    Photon1,
+    /// Photon map, method II: distances from the pixel to the photons' next hits (SPEC §3.3).
+    Photon2,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum SourceArg {
+    /// The scene's spot light.
+    Light,
+    /// The camera, through random image positions.
+    Camera,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -98,8 +129,23 @@ pub fn run(args: RenderArgs) -> Result<()> {
         WeightingArg::Cosine => Weighting::Cosine,
         WeightingArg::Uniform => Weighting::Uniform,
     };
+    let photon_params = PhotonParams {
+        photons: args.photons,
+        gather: args.gather,
+        source: match args.source {
+            SourceArg::Light => SourceKind::Light,
+            SourceArg::Camera => SourceKind::Camera,
+        },
+        rules: PathRules {
+            max_bounces: args.max_bounces,
+            absorption: args.absorption,
+        },
+        max_radius: args.max_radius,
+    };
     let estimator: Box<dyn Estimator> = match args.method {
         Method::Gather => Box::new(Gather::new(args.rays, weighting)?),
+        Method::Photon1 => Box::new(PhotonEstimator::new(PhotonMethod::StoredDistance, photon_params)?),
+        Method::Photon2 => Box::new(PhotonEstimator::new(PhotonMethod::NextHitPoint, photon_params)?),
     };
     let options = RenderOptions {
         width: args.size.0,
@@ -142,15 +188,27 @@ pub fn run(args: RenderArgs) -> Result<()> {
 
     if !args.quiet {
         let r = &rendered.report;
+        let what = match args.method {
+            Method::Gather => format!(
+                "{} rays/pixel, {:.2} Mrays/s",
+                args.rays,
+                r["mrays_per_s"].as_f64().unwrap_or(f64::NAN)
+            ),
+            Method::Photon1 | Method::Photon2 => format!(
+                "{} photons, K = {}, {} holes, {:.0} queries/s",
+                r["photons_stored"],
+                args.gather,
+                r["holes"],
+                r["gather_queries_per_s"].as_f64().unwrap_or(f64::NAN)
+            ),
+        };
         println!(
-            "{}: {}x{} {} ({} rays/pixel): {:.2} s, {:.2} Mrays/s, {} escaped, {} background -> {}, {}, {}",
+            "{}: {}x{} {} ({what}): {:.2} s, {} escaped, {} background -> {}, {}, {}",
             scene.name,
             options.width,
             options.height,
             estimator.method(),
-            args.rays,
             r["seconds"]["total"].as_f64().unwrap_or(f64::NAN),
-            r["mrays_per_s"].as_f64().unwrap_or(f64::NAN),
             r["escaped_rays"],
             r["background_pixels"],
             args.out.display(),

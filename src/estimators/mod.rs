@@ -11,9 +11,11 @@
 
 pub mod gather;
 mod harmonic;
+pub mod photon;
 
 pub use gather::Gather;
 pub use harmonic::{DistanceClamp, HarmonicMean};
+pub use photon::PhotonEstimator;
 
 use crate::accel::{Accel, Hit};
 use crate::error::Result;

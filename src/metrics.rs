@@ -1,0 +1,77 @@
+//! Accuracy metrics between two HMD images (SPEC §4, paper eq. 3).
+//!
+//! `f_diff = (Σ_i |H_ref(i) − H(i)| / N_pixels) · 100 / l_diag` over the pixels finite in both
+//! images; background pixels, holes and `+inf` pixels are excluded and counted.
+
+use crate::error::{Error, Result};
+use crate::image::HmdImage;
+
+/// `f_diff` and what it was computed over.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FDiff {
+    /// Mean absolute difference in percent of the scene diagonal.
+    pub value: f64,
+    /// Pixels finite in both images.
+    pub compared: usize,
+    /// Pixels left out: not finite in one image or the other.
+    pub excluded: usize,
+}
+
+/// `f_diff` of `test` against `reference` for a scene with bounding-box diagonal `l_diag`.
+pub fn f_diff(reference: &HmdImage, test: &HmdImage, l_diag: f32) -> Result<FDiff> {
+    if (reference.width, reference.height) != (test.width, test.height) {
+        return Err(Error::parameter(format!(
+            "images differ in size: {}x{} and {}x{}",
+            reference.width, reference.height, test.width, test.height
+        )));
+    }
+    let mut sum = 0.0f64;
+    let mut compared = 0;
+    for (&r, &t) in reference.data.iter().zip(&test.data) {
+        if r.is_finite() && t.is_finite() {
+            sum += (r as f64 - t as f64).abs();
+            compared += 1;
+        }
+    }
+    let value = if compared == 0 {
+        f64::NAN
+    } else {
+        sum / compared as f64 * 100.0 / l_diag as f64
+    };
+    Ok(FDiff {
+        value,
+        compared,
+        excluded: reference.data.len() - compared,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn image(data: Vec<f32>) -> HmdImage {
+        HmdImage::new(data.len() as u32, 1, data)
+    }
+
+    #[test]
+    fn an_image_against_itself_is_zero() {
+        let a = image(vec![1.0, 2.0, 3.5, f32::NAN]);
+        let d = f_diff(&a, &a, 10.0).unwrap();
+        assert_eq!((d.value, d.compared, d.excluded), (0.0, 3, 1));
+    }
+
+    #[test]
+    fn a_constant_offset_gives_100_c_over_l_diag() {
+        let a = image(vec![1.0, 2.0, 3.0, 4.0]);
+        let b = image(vec![1.5, 2.5, 3.5, 4.5]);
+        assert!((f_diff(&a, &b, 20.0).unwrap().value - 100.0 * 0.5 / 20.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn nan_and_infinite_pixels_are_excluded_and_counted() {
+        let a = image(vec![1.0, f32::NAN, 3.0, f32::INFINITY]);
+        let b = image(vec![2.0, 2.0, f32::NAN, 4.0]);
+        let d = f_diff(&a, &b, 100.0).unwrap();
+        assert_eq!((d.value, d.compared, d.excluded), (1.0, 1, 3));
+    }
+}
