@@ -27,22 +27,22 @@ pub struct RenderArgs {
     /// Gather rays per pixel N, for gather (the paper's reference is 65536).
     #[arg(long, default_value_t = gather::DEFAULT_RAYS)]
     rays: u32,
-    /// Photon methods: photons stored P, exactly.
+    /// photons stored P, exactly.
     #[arg(long, default_value_t = photon::DEFAULT_PHOTONS, help_heading = "Photon methods")]
     photons: usize,
-    /// Photon methods: nearest photons gathered per pixel K.
+    /// nearest photons gathered per pixel K.
     #[arg(long, default_value_t = photon::DEFAULT_GATHER, help_heading = "Photon methods")]
     gather: usize,
-    /// Photon methods: where paths start.
+    /// where paths start.
     #[arg(long, value_enum, default_value_t = SourceArg::Light, help_heading = "Photon methods")]
     source: SourceArg,
-    /// Photon methods: a path ends at this many surface interactions.
+    /// a path ends at this many surface interactions.
     #[arg(long, default_value_t = photon::DEFAULT_MAX_BOUNCES, help_heading = "Photon methods")]
     max_bounces: u32,
-    /// Photon methods: probability that a path ends at each interaction.
+    /// probability that a path ends at each interaction.
     #[arg(long, default_value_t = photon::DEFAULT_ABSORPTION, help_heading = "Photon methods")]
     absorption: f32,
-    /// Photon methods: gather only within this distance of the pixel [default: no limit].
+    /// gather only within this distance of the pixel [default: no limit].
     #[arg(long, value_name = "R", help_heading = "Photon methods")]
     max_radius: Option<f32>,
     /// Image size, WIDTHxHEIGHT.

@@ -6,6 +6,7 @@
 //! 0.01°, far inside the filter's 25.8° cone), and
 //! - method I: the distance to the next hit (f32, `+inf` when the path escaped): 8 B;
 //! - method II: the next-hit point `q = x + d·ω` (3 × f32, NaN when escaped): 16 B.
+//!
 //! That is 24 B per photon for method I and 32 B for method II, tree included (the paper
 //! needed 46 and 58 B).
 
@@ -80,8 +81,7 @@ enum Payloads {
     NextHitPoint(Vec<NextHitPoint>),
 }
 
-/// A photon found by a gather: its distance contribution for the query point, or `None` when
-/// its orientation differs from the query's.
+/// Photons in a kd-tree, with each method's payload.
 pub struct PhotonMap {
     tree: ImmutableKdTree<f32, u32, 3, BUCKET>,
     payloads: Payloads,
