@@ -7,8 +7,9 @@ use clap::{Args, ValueEnum};
 
 use hmdist::accel::BuildQuality;
 use hmdist::error::{Error, Result};
+use hmdist::estimators::cubemap::{self, Backend};
 use hmdist::estimators::photon::{self, PathRules, PhotonMethod, PhotonParams, SourceKind};
-use hmdist::estimators::{gather, Estimator, Gather, PhotonEstimator};
+use hmdist::estimators::{gather, Cubemap, Estimator, Gather, PhotonEstimator};
 use hmdist::image::{exr, picture, write_atomically};
 use hmdist::render::{render, RenderOptions, DEFAULT_SEED};
 use hmdist::sampling::Weighting;
@@ -27,22 +28,28 @@ pub struct RenderArgs {
     /// Gather rays per pixel N, for gather (the paper's reference is 65536).
     #[arg(long, default_value_t = gather::DEFAULT_RAYS)]
     rays: u32,
-    /// photons stored P, exactly.
+    /// Photons stored P, exactly.
     #[arg(long, default_value_t = photon::DEFAULT_PHOTONS, help_heading = "Photon methods")]
     photons: usize,
-    /// nearest photons gathered per pixel K.
+    /// Per-quadrant hemicube resolution R: top face 2R x 2R, sides 2R x R.
+    #[arg(long, default_value_t = cubemap::DEFAULT_CUBE_RES, help_heading = "Cube map")]
+    cube_res: u32,
+    /// Who builds the cube maps: gpu (wgpu), cpu (ray casting), auto (gpu if an adapter exists).
+    #[arg(long, value_enum, default_value_t = BackendArg::Auto, help_heading = "Cube map")]
+    backend: BackendArg,
+    /// Nearest photons gathered per pixel K.
     #[arg(long, default_value_t = photon::DEFAULT_GATHER, help_heading = "Photon methods")]
     gather: usize,
-    /// where paths start.
+    /// Where paths start.
     #[arg(long, value_enum, default_value_t = SourceArg::Light, help_heading = "Photon methods")]
     source: SourceArg,
-    /// a path ends at this many surface interactions.
+    /// A path ends at this many surface interactions.
     #[arg(long, default_value_t = photon::DEFAULT_MAX_BOUNCES, help_heading = "Photon methods")]
     max_bounces: u32,
-    /// probability that a path ends at each interaction.
+    /// Probability that a path ends at each interaction.
     #[arg(long, default_value_t = photon::DEFAULT_ABSORPTION, help_heading = "Photon methods")]
     absorption: f32,
-    /// gather only within this distance of the pixel [default: no limit].
+    /// Gather only within this distance of the pixel [default: no limit].
     #[arg(long, value_name = "R", help_heading = "Photon methods")]
     max_radius: Option<f32>,
     /// Image size, WIDTHxHEIGHT.
@@ -84,10 +91,19 @@ pub struct RenderArgs {
 enum Method {
     /// Ray-traced final gathering (SPEC §3.1).
     Gather,
+    /// Hemicube rasterisation, looked up with gather's directions (SPEC §3.2).
+    Cubemap,
     /// Photon map, method I: harmonic mean of the gathered photons' own distances (SPEC §3.3).
     Photon1,
     /// Photon map, method II: distances from the pixel to the photons' next hits (SPEC §3.3).
     Photon2,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum BackendArg {
+    Auto,
+    Gpu,
+    Cpu,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -144,6 +160,18 @@ pub fn run(args: RenderArgs) -> Result<()> {
     };
     let estimator: Box<dyn Estimator> = match args.method {
         Method::Gather => Box::new(Gather::new(args.rays, weighting)?),
+        Method::Cubemap => {
+            let backend = match args.backend {
+                BackendArg::Auto => Backend::Auto,
+                BackendArg::Gpu => Backend::Gpu,
+                BackendArg::Cpu => Backend::Cpu,
+            };
+            Box::new(Cubemap::new(
+                Gather::new(args.rays, weighting)?,
+                args.cube_res,
+                backend,
+            )?)
+        }
         Method::Photon1 => Box::new(PhotonEstimator::new(PhotonMethod::StoredDistance, photon_params)?),
         Method::Photon2 => Box::new(PhotonEstimator::new(PhotonMethod::NextHitPoint, photon_params)?),
     };
@@ -189,6 +217,12 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if !args.quiet {
         let r = &rendered.report;
         let what = match args.method {
+            Method::Cubemap => format!(
+                "{} rays/pixel, R = {}, {} backend",
+                args.rays,
+                args.cube_res,
+                r["backend"].as_str().unwrap_or("?")
+            ),
             Method::Gather => format!(
                 "{} rays/pixel, {:.2} Mrays/s",
                 args.rays,

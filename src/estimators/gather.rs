@@ -37,12 +37,12 @@ impl Gather {
         Ok(Gather { rays, weighting })
     }
 
-    /// The gather directions of one pixel, in order: shared with the cube-map estimator,
-    /// which looks the same directions up in its hemicube (SPEC §3.2).
+    /// Gather direction `j` of a pixel in its local frame (z = normal): shared with the
+    /// cube-map estimator, which looks the same directions up in its hemicube (SPEC §3.2).
     #[inline]
-    pub fn direction(&self, frame: &Frame, grid: (u32, u32), seed: u64, pixel: u64, j: u32) -> glam::Vec3 {
+    pub fn local_direction(&self, grid: (u32, u32), seed: u64, pixel: u64, j: u32) -> glam::Vec3 {
         let u = stratified(j, grid, random_pair(seed, pixel, j as u64));
-        frame.to_world(hemisphere(self.weighting, u))
+        hemisphere(self.weighting, u)
     }
 
     /// H at one surface point, and how many of its rays escaped.
@@ -59,7 +59,7 @@ impl Gather {
         let mut mean = HarmonicMean::default();
         let mut escaped = 0;
         for j in 0..self.rays {
-            let dir = self.direction(&frame, grid, context.seed, pixel, j);
+            let dir = frame.to_world(self.local_direction(grid, context.seed, pixel, j));
             let d = accel.hit_distance(origin, dir, context.clamp.max, Some(hit.triangle));
             escaped += d.is_infinite() as u32;
             mean.add(d, context.clamp);

@@ -9,10 +9,12 @@
 //! Conventions: distances in scene units; a pixel's normal faces the camera (surfaces are
 //! two-sided); H is `+inf` where every sample escaped and NaN for background pixels and holes.
 
+pub mod cubemap;
 pub mod gather;
 mod harmonic;
 pub mod photon;
 
+pub use cubemap::Cubemap;
 pub use gather::Gather;
 pub use harmonic::{DistanceClamp, HarmonicMean};
 pub use photon::PhotonEstimator;

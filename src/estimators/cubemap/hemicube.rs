@@ -1,0 +1,168 @@
+//! Hemicube geometry (SPEC §3.2; paper §2.2.3, Fig. 3–4), shared by the CPU and GPU backends.
+//!
+//! In the local frame of a surface point (z = normal, x = t, y = b) the hemicube has five
+//! faces: the top face (axis +z, `2R × 2R` texels) and four side faces (axes ±x, ±y,
+//! `2R × R` texels: their upper half). A texel stores the depth `t` along its face's axis of
+//! the nearest surface through its centre. A direction `ω` looks up the face of its largest
+//! component, the texel it falls in, and converts the stored depth to a distance along `ω`:
+//! `d = t / (ω · axis)` (the paper's `t / f(θ, φ)`).
+
+use glam::Vec3;
+
+/// The five faces, in texel-index order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Face {
+    Top,
+    PosX,
+    NegX,
+    PosY,
+    NegY,
+}
+
+pub const FACES: [Face; 5] = [Face::Top, Face::PosX, Face::NegX, Face::PosY, Face::NegY];
+
+impl Face {
+    /// The face's axis in the local frame.
+    pub fn axis(self) -> Vec3 {
+        match self {
+            Face::Top => Vec3::Z,
+            Face::PosX => Vec3::X,
+            Face::NegX => Vec3::NEG_X,
+            Face::PosY => Vec3::Y,
+            Face::NegY => Vec3::NEG_Y,
+        }
+    }
+
+    /// The face's two in-plane directions (u across, v up), local frame. On the side faces v
+    /// is the normal, so rows count up from the horizon.
+    pub fn plane(self) -> (Vec3, Vec3) {
+        match self {
+            Face::Top => (Vec3::X, Vec3::Y),
+            Face::PosX => (Vec3::Y, Vec3::Z),
+            Face::NegX => (Vec3::NEG_Y, Vec3::Z),
+            Face::PosY => (Vec3::NEG_X, Vec3::Z),
+            Face::NegY => (Vec3::X, Vec3::Z),
+        }
+    }
+}
+
+/// A hemicube of per-quadrant resolution `R`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Hemicube {
+    pub resolution: u32,
+}
+
+impl Hemicube {
+    /// Texel columns × rows of `face`.
+    pub fn face_size(&self, face: Face) -> (u32, u32) {
+        let r = self.resolution;
+        if face == Face::Top {
+            (2 * r, 2 * r)
+        } else {
+            (2 * r, r)
+        }
+    }
+
+    /// Texels of the whole hemicube: `4R² + 4 · 2R² = 12R²`.
+    pub fn texel_count(&self) -> usize {
+        12 * (self.resolution as usize).pow(2)
+    }
+
+    /// Index of the first texel of `face`.
+    fn face_offset(&self, face: Face) -> usize {
+        let r2 = (self.resolution as usize).pow(2);
+        match face {
+            Face::Top => 0,
+            Face::PosX => 4 * r2,
+            Face::NegX => 6 * r2,
+            Face::PosY => 8 * r2,
+            Face::NegY => 10 * r2,
+        }
+    }
+
+    /// The face and texel index a local direction `w` (z ≥ 0) falls in, and `w · axis`.
+    #[inline]
+    pub fn lookup(&self, w: Vec3) -> (Face, usize, f32) {
+        let a = w.abs();
+        let face = if w.z >= a.x && w.z >= a.y {
+            Face::Top
+        } else if a.x >= a.y {
+            if w.x > 0.0 {
+                Face::PosX
+            } else {
+                Face::NegX
+            }
+        } else if w.y > 0.0 {
+            Face::PosY
+        } else {
+            Face::NegY
+        };
+        let along = w.dot(face.axis());
+        let (u, v) = face.plane();
+        // Plane coordinates in [-1, 1] (top) or [-1, 1] × [0, 1] (sides).
+        let (s, t) = (w.dot(u) / along, w.dot(v) / along);
+        let (cols, rows) = self.face_size(face);
+        let col = (((s + 1.0) * 0.5 * cols as f32) as u32).min(cols - 1);
+        let row = if face == Face::Top {
+            (((t + 1.0) * 0.5 * rows as f32) as u32).min(rows - 1)
+        } else {
+            ((t * rows as f32) as u32).min(rows - 1)
+        };
+        (face, self.face_offset(face) + (row * cols + col) as usize, along)
+    }
+
+    /// The unit local direction through the centre of texel `index`, with its face.
+    pub fn texel_direction(&self, index: usize) -> (Face, Vec3) {
+        let face = *FACES
+            .iter()
+            .rev()
+            .find(|&&f| self.face_offset(f) <= index)
+            .expect("texel index in range");
+        let (cols, rows) = self.face_size(face);
+        let local = (index - self.face_offset(face)) as u32;
+        let (col, row) = (local % cols, local / cols);
+        let s = (col as f32 + 0.5) / cols as f32 * 2.0 - 1.0;
+        let t = if face == Face::Top {
+            (row as f32 + 0.5) / rows as f32 * 2.0 - 1.0
+        } else {
+            (row as f32 + 0.5) / rows as f32
+        };
+        let (u, v) = face.plane();
+        (face, (face.axis() + s * u + t * v).normalize())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::{hemisphere, random_pair, Weighting};
+
+    #[test]
+    fn every_texel_centre_looks_itself_up() {
+        for r in [1, 4, 16] {
+            let cube = Hemicube { resolution: r };
+            for i in 0..cube.texel_count() {
+                let (face, w) = cube.texel_direction(i);
+                let (found, index, along) = cube.lookup(w);
+                assert_eq!((found, index), (face, i), "R = {r}, texel {i}");
+                assert!((along - w.dot(face.axis())).abs() < 1e-6);
+            }
+        }
+    }
+
+    #[test]
+    fn hemisphere_directions_spread_over_all_faces_and_stay_in_range() {
+        let cube = Hemicube { resolution: 8 };
+        let mut hits = vec![0; cube.texel_count()];
+        for j in 0..200_000 {
+            let w = hemisphere(Weighting::Uniform, random_pair(5, 0, j));
+            let (face, index, along) = cube.lookup(w);
+            assert!(along > 0.0 && along <= 1.0 + 1e-6, "{face:?} {along}");
+            hits[index] += 1;
+        }
+        assert!(
+            hits.iter().all(|&h| h > 0),
+            "every texel is looked up by some direction"
+        );
+    }
+}
