@@ -88,3 +88,35 @@ fn open_scenes_count_directions_that_see_nothing_as_one_over_d_zero() {
     assert_eq!((open.data[0], gathered.data[0]), (f32::INFINITY, f32::INFINITY));
     assert_eq!(report["escaped_rays"], report["rays_cast"]);
 }
+
+#[test]
+fn gpu_and_cpu_backends_agree_on_cube() {
+    // Needs a Vulkan (or Metal/DX12) adapter: Mesa's lavapipe on machines without a GPU
+    // (Debian: mesa-vulkan-drivers libvulkan1; .ci/run installs them). Skips only where no
+    // adapter exists, and never in CI.
+    let scene = Scene::load("cube").unwrap();
+    let estimator = Cubemap::new(Gather::new(64, Weighting::Cosine).unwrap(), 16, Backend::Gpu).unwrap();
+    let options = RenderOptions {
+        width: 64,
+        height: 64,
+        ..RenderOptions::default()
+    };
+    let gpu = match render(&scene, &estimator as &dyn Estimator, &options, 0.0, &Silent) {
+        Ok(rendered) => rendered,
+        Err(e) if std::env::var("CI").is_err() && e.to_string().contains("no Vulkan") => {
+            println!("skipped: {e}");
+            return;
+        }
+        Err(e) => panic!("the GPU backend must run here: {e}"),
+    };
+    println!("adapter: {}", gpu.report["adapter"]);
+    assert_eq!(gpu.report["backend"], "gpu");
+    let (cpu, _) = cubemap(&scene, 64, 64, 16, Backend::Cpu);
+    let d = f_diff(&cpu, &gpu.image, scene.diagonal()).unwrap();
+    println!(
+        "gpu vs cpu: mean |ΔH| / l_diag × 100 = {:.5} over {} pixels",
+        d.value, d.compared
+    );
+    assert_eq!(d.excluded, 0);
+    assert!(d.value < 0.01, "{}", d.value);
+}

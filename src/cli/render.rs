@@ -34,7 +34,8 @@ pub struct RenderArgs {
     /// Per-quadrant hemicube resolution R: top face 2R x 2R, sides 2R x R.
     #[arg(long, default_value_t = cubemap::DEFAULT_CUBE_RES, help_heading = "Cube map")]
     cube_res: u32,
-    /// Who builds the cube maps: gpu (wgpu), cpu (ray casting), auto (gpu if an adapter exists).
+    /// Who builds the cube maps: gpu (wgpu rasterisation), cpu (ray casting), auto (gpu if a
+    /// hardware adapter exists, else cpu).
     #[arg(long, value_enum, default_value_t = BackendArg::Auto, help_heading = "Cube map")]
     backend: BackendArg,
     /// Nearest photons gathered per pixel K.

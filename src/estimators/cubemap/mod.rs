@@ -6,9 +6,11 @@
 //! the texel discretisation; its cost is building the cube maps, and hardly grows with N.
 //!
 //! Backends: `cpu` fills texels by ray casting (a ray through the texel centre sees exactly
-//! what rasterisation stores there); `gpu` rasterises the faces with wgpu.
+//! what rasterisation stores there); `gpu` rasterises the faces with wgpu; `auto` takes a
+//! hardware GPU where there is one, else the CPU.
 
 mod cpu;
+mod gpu;
 pub mod hemicube;
 
 use std::time::Instant;
@@ -30,7 +32,8 @@ pub const MAX_CUBE_RES: u32 = 1024;
 pub enum Backend {
     Cpu,
     Gpu,
-    /// The GPU where a Vulkan, Metal or DX12 adapter exists, else the CPU.
+    /// The GPU where a hardware Vulkan, Metal or DX12 adapter exists, else the CPU (a
+    /// software rasteriser such as lavapipe is slower than the CPU backend).
     Auto,
 }
 
@@ -73,29 +76,45 @@ impl Estimator for Cubemap {
         gbuffer: &GBuffer,
         progress: &dyn Progress,
     ) -> Result<Estimate> {
-        let start = Instant::now();
-        let (hmd, cast, escaped) = match self.backend {
-            Backend::Cpu | Backend::Auto => cpu::estimate(self, context, gbuffer, progress),
+        let gpu = match self.backend {
+            Backend::Cpu => None,
             Backend::Gpu => {
-                return Err(Error::parameter(
-                    "--backend gpu: no GPU backend in this build yet",
-                ));
+                Some(gpu::Gpu::open(true).map_err(|e| Error::parameter(format!("--backend gpu: {e}")))?)
             }
+            // A software rasteriser is slower than the CPU backend: auto wants real hardware.
+            Backend::Auto => gpu::Gpu::open(false).ok(),
         };
-        let seconds = start.elapsed().as_secs_f64();
+        let Some(gpu) = gpu else {
+            let start = Instant::now();
+            let (hmd, cast, escaped) = cpu::estimate(self, context, gbuffer, progress);
+            let extra = json!({
+                "backend": "cpu",
+                "adapter": serde_json::Value::Null,
+                // The CPU fills only the texels that are looked up, one ray each.
+                "texels_rasterised": cast,
+                "texels_per_hemicube": self.hemicube.texel_count(),
+            });
+            return Ok(Estimate {
+                hmd,
+                rays_cast: cast,
+                escaped_rays: escaped,
+                // The CPU backend fills a texel at its first lookup: build and lookup interleave.
+                phases: vec![("cubemap_build_and_lookup", start.elapsed().as_secs_f64())],
+                extra: extra.as_object().cloned().unwrap_or_default(),
+            });
+        };
+        let (hmd, texels, raster, lookup) = gpu::estimate(&gpu, self, context, gbuffer, progress)?;
         let extra = json!({
-            "backend": "cpu",
-            "adapter": serde_json::Value::Null,
-            // The CPU fills only the texels that are looked up, one ray each.
-            "texels_rasterised": cast,
+            "backend": "gpu",
+            "adapter": gpu.adapter_name,
+            "texels_rasterised": texels,
             "texels_per_hemicube": self.hemicube.texel_count(),
         });
         Ok(Estimate {
             hmd,
-            rays_cast: cast,
-            escaped_rays: escaped,
-            // The CPU backend fills a texel at its first lookup: build and lookup interleave.
-            phases: vec![("cubemap_build_and_lookup", seconds)],
+            rays_cast: 0,
+            escaped_rays: 0,
+            phases: vec![("cubemap_build", raster), ("cubemap_lookup", lookup)],
             extra: extra.as_object().cloned().unwrap_or_default(),
         })
     }

@@ -1,0 +1,505 @@
+//! The GPU backend of the cube-map estimator: wgpu rasterises the five faces of many pixels'
+//! hemicubes per submission into one R32Float atlas, and a compute pass does the lookups, so
+//! only H per pixel comes back (SPEC §3.2).
+//!
+//! Batching: each hemicube is a `2R × 6R` block of the atlas (top face `2R × 2R`, then the four
+//! side faces `2R × R`); one instanced draw renders the scene once per (hemicube, face), the
+//! vertex shader placing it in its block and clip distances cutting it to the block's edges.
+//! Needs the CLIP_DISTANCES feature (present on Vulkan, including Mesa's lavapipe), and no
+//! multiview.
+
+use std::time::Instant;
+
+use bytemuck::{Pod, Zeroable};
+use wgpu::util::DeviceExt;
+
+use super::Cubemap;
+use crate::error::{Error, Result};
+use crate::estimators::{EstimateContext, GBuffer};
+use crate::progress::Progress;
+use crate::sampling::{strata, Frame, Weighting};
+
+/// Largest atlas side we ask for (the device limit may be lower).
+const MAX_ATLAS: u32 = 4096;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Params {
+    atlas_size: [f32; 2],
+    atlas_cols: u32,
+    resolution: u32,
+    count: u32,
+    rays: u32,
+    grid_a: u32,
+    grid_b: u32,
+    weighting: u32,
+    has_max: u32,
+    seed: [u32; 2],
+    near: f32,
+    far: f32,
+    d_min: f32,
+    d_max: f32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Cube {
+    origin: [f32; 4],
+    t: [f32; 4],
+    b: [f32; 4],
+    n: [f32; 4],
+}
+
+/// A device that can run the hemicube pipeline, and what it is called.
+pub struct Gpu {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    pub adapter_name: String,
+    max_texture: u32,
+}
+
+impl Gpu {
+    /// The first Vulkan, Metal or DX12 adapter with clip distances, if any. (Not GL: wgpu's GL
+    /// fallback cannot render to R32Float.) A software rasteriser (Mesa's lavapipe) is taken
+    /// only when `allow_software`.
+    pub fn open(allow_software: bool) -> std::result::Result<Gpu, String> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+            backends: wgpu::Backends::VULKAN | wgpu::Backends::METAL | wgpu::Backends::DX12,
+            ..wgpu::InstanceDescriptor::new_without_display_handle_from_env()
+        });
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: None,
+            ..Default::default()
+        }))
+        .map_err(|e| format!("no Vulkan, Metal or DX12 adapter ({e})"))?;
+        let info = adapter.get_info();
+        if info.device_type == wgpu::DeviceType::Cpu && !allow_software {
+            return Err(format!("adapter '{}' is a software rasteriser", info.name));
+        }
+        if !adapter.features().contains(wgpu::Features::CLIP_DISTANCES) {
+            return Err(format!("adapter '{}' lacks clip distances", info.name));
+        }
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("hmdist hemicubes"),
+            required_features: wgpu::Features::CLIP_DISTANCES,
+            required_limits: limits.clone(),
+            ..Default::default()
+        }))
+        .map_err(|e| format!("adapter '{}' refused a device: {e}", info.name))?;
+        Ok(Gpu {
+            device,
+            queue,
+            adapter_name: format!("{} ({:?})", info.name, info.backend),
+            max_texture: limits.max_texture_dimension_2d,
+        })
+    }
+}
+
+/// H per pixel, texels rasterised, and seconds spent rasterising and looking up.
+pub fn estimate(
+    gpu: &Gpu,
+    cubemap: &Cubemap,
+    context: &EstimateContext,
+    gbuffer: &GBuffer,
+    progress: &dyn Progress,
+) -> Result<(Vec<f32>, u64, f64, f64)> {
+    let r = cubemap.hemicube.resolution;
+    let side = MAX_ATLAS.min(gpu.max_texture);
+    let (cols, rows) = (side / (2 * r), side / (6 * r));
+    if cols == 0 || rows == 0 {
+        return Err(Error::parameter(format!(
+            "--cube-res {r} does not fit the GPU's largest texture ({side} texels)"
+        )));
+    }
+    let capacity = (cols * rows) as usize;
+    let atlas_size = (cols * 2 * r, rows * 6 * r);
+    // Catch the device's errors here rather than let wgpu panic on them.
+    let out_of_memory = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let result = estimate_batches(
+        gpu,
+        cubemap,
+        context,
+        gbuffer,
+        progress,
+        atlas_size,
+        (cols, capacity),
+    );
+    for scope in [validation, out_of_memory] {
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::parameter(format!("the GPU backend failed: {e}")));
+        }
+    }
+    result
+}
+
+fn estimate_batches(
+    gpu: &Gpu,
+    cubemap: &Cubemap,
+    context: &EstimateContext,
+    gbuffer: &GBuffer,
+    progress: &dyn Progress,
+    atlas_size: (u32, u32),
+    (cols, capacity): (u32, usize),
+) -> Result<(Vec<f32>, u64, f64, f64)> {
+    let r = cubemap.hemicube.resolution;
+    let pipeline = Pipeline::new(gpu, context, atlas_size);
+
+    let pixels: Vec<(usize, Cube)> = gbuffer
+        .points
+        .iter()
+        .enumerate()
+        .filter_map(|(i, p)| {
+            p.map(|hit| {
+                let frame = Frame::from_normal(hit.normal);
+                let o = hit.spawn_origin(hit.normal);
+                let v = |v: glam::Vec3, w: f32| [v.x, v.y, v.z, w];
+                (
+                    i,
+                    Cube {
+                        origin: v(o, 0.0),
+                        t: v(frame.t, 0.0),
+                        b: v(frame.b, 0.0),
+                        n: v(frame.n, f32::from_bits(i as u32)),
+                    },
+                )
+            })
+        })
+        .collect();
+
+    let (a, b) = strata(cubemap.gather.rays);
+    let clamp = context.clamp;
+    let base = Params {
+        atlas_size: [atlas_size.0 as f32, atlas_size.1 as f32],
+        atlas_cols: cols,
+        resolution: r,
+        count: 0,
+        rays: cubemap.gather.rays,
+        grid_a: a,
+        grid_b: b,
+        weighting: (cubemap.gather.weighting == Weighting::Uniform) as u32,
+        has_max: clamp.max.is_finite() as u32,
+        seed: [context.seed as u32, (context.seed >> 32) as u32],
+        near: clamp.min,
+        far: 4.0 * context.scene.diagonal() + 1.0,
+        d_min: clamp.min,
+        d_max: if clamp.max.is_finite() { clamp.max } else { 0.0 },
+    };
+
+    let mut hmd = vec![f32::NAN; gbuffer.points.len()];
+    let (mut raster, mut lookup) = (0.0, 0.0);
+    progress.start("cube maps", pixels.len() as u64);
+    for batch in pixels.chunks(capacity) {
+        let cubes: Vec<Cube> = batch.iter().map(|(_, c)| *c).collect();
+        let params = Params {
+            count: batch.len() as u32,
+            ..base
+        };
+        let (values, t_raster, t_lookup) = pipeline.run(gpu, &params, &cubes)?;
+        raster += t_raster;
+        lookup += t_lookup;
+        for ((i, _), h) in batch.iter().zip(values) {
+            hmd[*i] = h;
+        }
+        progress.advance(batch.len() as u64);
+    }
+    progress.finish();
+    let texels = pixels.len() as u64 * cubemap.hemicube.texel_count() as u64;
+    Ok((hmd, texels, raster, lookup))
+}
+
+/// The render and compute pipelines and the resources that live across batches.
+struct Pipeline {
+    render: wgpu::RenderPipeline,
+    compute: wgpu::ComputePipeline,
+    render_layout: wgpu::BindGroupLayout,
+    compute_layout: wgpu::BindGroupLayout,
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    index_count: u32,
+    atlas: wgpu::Texture,
+    depth: wgpu::Texture,
+}
+
+impl Pipeline {
+    fn new(gpu: &Gpu, context: &EstimateContext, atlas_size: (u32, u32)) -> Pipeline {
+        let device = &gpu.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("hemicube.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("hemicube.wgsl").into()),
+        });
+        let mesh = &context.scene.mesh;
+        let positions: Vec<[f32; 3]> = mesh.positions.iter().map(|p| p.to_array()).collect();
+        let indices: Vec<u32> = mesh.indices.iter().flatten().copied().collect();
+        let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("vertices"),
+            contents: bytemuck::cast_slice(&positions),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let index_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("indices"),
+            contents: bytemuck::cast_slice(&indices),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        let entry = |binding, visibility, ty| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility,
+            ty,
+            count: None,
+        };
+        let uniform = wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        };
+        let storage = |read_only| wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        };
+        let render_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("rasterise"),
+            entries: &[
+                entry(0, wgpu::ShaderStages::VERTEX, uniform),
+                entry(1, wgpu::ShaderStages::VERTEX, storage(true)),
+            ],
+        });
+        let compute_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("lookup"),
+            entries: &[
+                entry(0, wgpu::ShaderStages::COMPUTE, uniform),
+                entry(1, wgpu::ShaderStages::COMPUTE, storage(true)),
+                entry(
+                    2,
+                    wgpu::ShaderStages::COMPUTE,
+                    wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                ),
+                entry(3, wgpu::ShaderStages::COMPUTE, storage(false)),
+            ],
+        });
+        let layout = |bgl: &wgpu::BindGroupLayout| {
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: None,
+                bind_group_layouts: &[Some(bgl)],
+                immediate_size: 0,
+            })
+        };
+        let render = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("rasterise hemicubes"),
+            layout: Some(&layout(&render_layout)),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("rasterise"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: 12,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &wgpu::vertex_attr_array![0 => Float32x3],
+                })],
+            },
+            primitive: wgpu::PrimitiveState {
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: wgpu::TextureFormat::Depth32Float,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("store_depth"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: wgpu::TextureFormat::R32Float,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let compute = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("look hemicubes up"),
+            layout: Some(&layout(&compute_layout)),
+            module: &module,
+            entry_point: Some("lookup"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let texture = |format, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: None,
+                size: wgpu::Extent3d {
+                    width: atlas_size.0,
+                    height: atlas_size.1,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        Pipeline {
+            render,
+            compute,
+            render_layout,
+            compute_layout,
+            vertices,
+            indices: index_buffer,
+            index_count: indices.len() as u32,
+            atlas: texture(
+                wgpu::TextureFormat::R32Float,
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            ),
+            depth: texture(
+                wgpu::TextureFormat::Depth32Float,
+                wgpu::TextureUsages::RENDER_ATTACHMENT,
+            ),
+        }
+    }
+
+    /// Rasterises and looks up one batch; H per hemicube and the seconds of each half.
+    fn run(&self, gpu: &Gpu, params: &Params, cubes: &[Cube]) -> Result<(Vec<f32>, f64, f64)> {
+        let device = &gpu.device;
+        let init = |label, contents: &[u8], usage| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
+        let params_buffer = init("params", bytemuck::bytes_of(params), wgpu::BufferUsages::UNIFORM);
+        let cube_buffer = init("cubes", bytemuck::cast_slice(cubes), wgpu::BufferUsages::STORAGE);
+        let out_size = (cubes.len() * 4) as u64;
+        let output = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("hmd"),
+            size: out_size,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("hmd readback"),
+            size: out_size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let atlas_view = self.atlas.create_view(&Default::default());
+        let depth_view = self.depth.create_view(&Default::default());
+
+        let start = Instant::now();
+        let render_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout: &self.render_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: params_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: cube_buffer.as_entire_binding(),
+                },
+            ],
+        });
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("hemicubes"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &atlas_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    // -1: no surface through this texel (the direction escapes).
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                            r: -1.0,
+                            g: 0.0,
+                            b: 0.0,
+                            a: 1.0,
+                        }),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.render);
+            pass.set_bind_group(0, &render_group, &[]);
+            pass.set_vertex_buffer(0, self.vertices.slice(..));
+            pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..self.index_count, 0, 0..(cubes.len() as u32 * 5));
+        }
+        gpu.queue.submit([encoder.finish()]);
+        let _ = device.poll(wgpu::PollType::wait_indefinitely());
+        let raster = start.elapsed().as_secs_f64();
+
+        let start = Instant::now();
+        let compute_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout: &self.compute_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: params_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: cube_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(&atlas_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: output.as_entire_binding(),
+                },
+            ],
+        });
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.compute);
+            pass.set_bind_group(0, &compute_group, &[]);
+            pass.dispatch_workgroups((cubes.len() as u32).div_ceil(64), 1, 1);
+        }
+        encoder.copy_buffer_to_buffer(&output, 0, &readback, 0, out_size);
+        gpu.queue.submit([encoder.finish()]);
+        let slice = readback.slice(..);
+        slice.map_async(wgpu::MapMode::Read, |_| {});
+        let _ = device.poll(wgpu::PollType::wait_indefinitely());
+        let values: Vec<f32> = match slice.get_mapped_range() {
+            Ok(view) => bytemuck::cast_slice(&view).to_vec(),
+            Err(e) => {
+                return Err(Error::parameter(format!(
+                    "cannot read the GPU's results back: {e}"
+                )))
+            }
+        };
+        readback.unmap();
+        Ok((values, raster, start.elapsed().as_secs_f64()))
+    }
+}

@@ -1,0 +1,238 @@
+// Hemicube rasterisation and lookup on the GPU (SPEC §3.2). Mirrors hemicube.rs and
+// sampling.rs: the same texel layout, the same counter-based random numbers (64-bit integer
+// arithmetic emulated on pairs of u32), the same stratification and hemisphere maps.
+enable clip_distances;
+
+struct Params {
+    atlas_size: vec2<f32>,
+    atlas_cols: u32,
+    resolution: u32,
+    count: u32,
+    rays: u32,
+    grid_a: u32,
+    grid_b: u32,
+    weighting: u32,      // 0 cosine, 1 uniform
+    has_max: u32,
+    seed: vec2<u32>,     // (lo, hi)
+    near: f32,
+    far: f32,
+    d_min: f32,
+    d_max: f32,
+};
+
+// One hemicube: its centre and local frame; n.w holds the pixel index (bit pattern).
+struct Cube {
+    origin: vec4<f32>,
+    t: vec4<f32>,
+    b: vec4<f32>,
+    n: vec4<f32>,
+};
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> cubes: array<Cube>;
+
+struct FaceFrame {
+    axis: vec3<f32>,
+    u: vec3<f32>,
+    v: vec3<f32>,
+};
+
+fn face_frame(face: u32) -> FaceFrame {
+    switch face {
+        case 0u: { return FaceFrame(vec3(0.0, 0.0, 1.0), vec3(1.0, 0.0, 0.0), vec3(0.0, 1.0, 0.0)); }
+        case 1u: { return FaceFrame(vec3(1.0, 0.0, 0.0), vec3(0.0, 1.0, 0.0), vec3(0.0, 0.0, 1.0)); }
+        case 2u: { return FaceFrame(vec3(-1.0, 0.0, 0.0), vec3(0.0, -1.0, 0.0), vec3(0.0, 0.0, 1.0)); }
+        case 3u: { return FaceFrame(vec3(0.0, 1.0, 0.0), vec3(-1.0, 0.0, 0.0), vec3(0.0, 0.0, 1.0)); }
+        default: { return FaceFrame(vec3(0.0, -1.0, 0.0), vec3(1.0, 0.0, 0.0), vec3(0.0, 0.0, 1.0)); }
+    }
+}
+
+// Top-left atlas texel of `face` of hemicube `cube`, and the face's rows.
+fn face_origin(cube: u32, face: u32) -> vec3<u32> {
+    let r = params.resolution;
+    let x0 = (cube % params.atlas_cols) * 2u * r;
+    let block = (cube / params.atlas_cols) * 6u * r;
+    if face == 0u {
+        return vec3(x0, block, 2u * r);
+    }
+    return vec3(x0, block + 2u * r + (face - 1u) * r, r);
+}
+
+const HORIZON_MARGIN: f32 = 1e-5;
+
+struct VertexOut {
+    @builtin(position) position: vec4<f32>,
+    @location(0) depth: f32,
+    @builtin(clip_distances) clip: array<f32, 4>,
+};
+
+@vertex
+fn rasterise(@location(0) p: vec3<f32>, @builtin(instance_index) instance: u32) -> VertexOut {
+    let cube = instance / 5u;
+    let face = instance % 5u;
+    let c = cubes[cube];
+    let rel = p - c.origin.xyz;
+    let local = vec3(dot(rel, c.t.xyz), dot(rel, c.b.xyz), dot(rel, c.n.xyz));
+    let f = face_frame(face);
+    let w = dot(local, f.axis);
+    let s = dot(local, f.u);
+    let t = dot(local, f.v);
+    var out: VertexOut;
+    // Face coordinates, times w: x in [-w, w]; y in [-w, w] (top) or t in [0, w] (sides).
+    var y = t;
+    if face == 0u {
+        out.clip = array<f32, 4>(w - s, w + s, w - t, w + t);
+    } else {
+        y = 2.0 * t - w;
+        // Cut at a hair above the horizon: where the surface point is exact (a floor at
+        // y = 0) its plane lies exactly on the horizon, and clipping would leave slivers of
+        // it at the near plane in the bottom rows. Texel centres lie at least 1/(2R) above.
+        out.clip = array<f32, 4>(w - s, w + s, t - HORIZON_MARGIN * w, w - t);
+    }
+    let o = face_origin(cube, face);
+    let r = f32(params.resolution);
+    let h = f32(o.z);
+    let size = params.atlas_size;
+    let x_clip = w * ((f32(o.x) + r) * 2.0 / size.x - 1.0) + s * (2.0 * r / size.x);
+    let y_clip = w * (1.0 - (2.0 * f32(o.y) + h) / size.y) + y * (h / size.y);
+    let z_clip = params.far / (params.far - params.near) * (w - params.near);
+    out.position = vec4(x_clip, y_clip, z_clip, w);
+    out.depth = w;
+    return out;
+}
+
+@fragment
+fn store_depth(@location(0) depth: f32) -> @location(0) vec4<f32> {
+    return vec4(depth, 0.0, 0.0, 1.0);
+}
+
+// ---- lookups -------------------------------------------------------------------------------
+
+@group(0) @binding(2) var atlas: texture_2d<f32>;
+@group(0) @binding(3) var<storage, read_write> hmd: array<f32>;
+
+// 64-bit integers as vec2(lo, hi).
+fn mul_hi32(x: u32, y: u32) -> u32 {
+    let x0 = x & 0xffffu;
+    let x1 = x >> 16u;
+    let y0 = y & 0xffffu;
+    let y1 = y >> 16u;
+    let p00 = x0 * y0;
+    let p01 = x0 * y1;
+    let p10 = x1 * y0;
+    let p11 = x1 * y1;
+    let mid = (p00 >> 16u) + (p01 & 0xffffu) + (p10 & 0xffffu);
+    return p11 + (p01 >> 16u) + (p10 >> 16u) + (mid >> 16u);
+}
+
+fn mul64(a: vec2<u32>, b: vec2<u32>) -> vec2<u32> {
+    return vec2(a.x * b.x, mul_hi32(a.x, b.x) + a.x * b.y + a.y * b.x);
+}
+
+fn add64(a: vec2<u32>, b: vec2<u32>) -> vec2<u32> {
+    let lo = a.x + b.x;
+    return vec2(lo, a.y + b.y + select(0u, 1u, lo < a.x));
+}
+
+fn shr64(a: vec2<u32>, n: u32) -> vec2<u32> {
+    // 0 < n < 32
+    return vec2((a.x >> n) | (a.y << (32u - n)), a.y >> n);
+}
+
+fn shr64_big(a: vec2<u32>, n: u32) -> vec2<u32> {
+    // 32 <= n < 64
+    return vec2(a.y >> (n - 32u), 0u);
+}
+
+fn mix64(x0: vec2<u32>) -> vec2<u32> {
+    var x = x0;
+    x = x ^ shr64(x, 27u);
+    x = mul64(x, vec2(0x2BA7B653u, 0x3C79AC49u));
+    x = x ^ shr64_big(x, 33u);
+    x = mul64(x, vec2(0x4AC4AE35u, 0x1C69B3F7u));
+    return x ^ shr64(x, 27u);
+}
+
+const GOLDEN: vec2<u32> = vec2(0x7F4A7C15u, 0x9E3779B9u);
+
+fn random_pair(seed: vec2<u32>, stream: vec2<u32>, counter: u32) -> vec2<f32> {
+    let key = mix64(seed ^ GOLDEN);
+    let bits = mix64(add64(mix64(key ^ stream), mul64(vec2(counter, 0u), GOLDEN)));
+    let scale = 1.0 / 16777216.0;
+    return vec2(f32(bits.y >> 8u) * scale, f32((shr64(bits, 8u).x) & 0xffffffu) * scale);
+}
+
+fn hemisphere(u: vec2<f32>) -> vec3<f32> {
+    var sin_theta: f32;
+    var cos_theta: f32;
+    if params.weighting == 0u {
+        sin_theta = sqrt(u.x);
+        cos_theta = sqrt(1.0 - u.x);
+    } else {
+        cos_theta = 1.0 - u.x;
+        sin_theta = sqrt(max(1.0 - cos_theta * cos_theta, 0.0));
+    }
+    let phi = 6.2831855 * u.y;
+    return vec3(cos(phi) * sin_theta, sin(phi) * sin_theta, cos_theta);
+}
+
+@compute @workgroup_size(64)
+fn lookup(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= params.count {
+        return;
+    }
+    let pixel = bitcast<u32>(cubes[i].n.w);
+    let a = params.grid_a;
+    let b = params.grid_b;
+    let r = params.resolution;
+    let one_below = 1.0 - 1.1920929e-7;
+    var sum = 0.0;
+    var carry = 0.0; // Kahan summation: up to 65,536 terms in f32
+    for (var j = 0u; j < params.rays; j++) {
+        let xi = random_pair(params.seed, vec2(pixel, 0u), j);
+        let u = vec2(min((f32(j % a) + xi.x) / f32(a), one_below), min((f32(j / a) + xi.y) / f32(b), one_below));
+        let w = hemisphere(u);
+        let m = abs(w);
+        var face = 0u;
+        if !(w.z >= m.x && w.z >= m.y) {
+            if m.x >= m.y {
+                face = select(2u, 1u, w.x > 0.0);
+            } else {
+                face = select(4u, 3u, w.y > 0.0);
+            }
+        }
+        let f = face_frame(face);
+        let along = dot(w, f.axis);
+        let s = dot(w, f.u) / along;
+        let t = dot(w, f.v) / along;
+        let o = face_origin(i, face);
+        let col = min(u32((s + 1.0) * f32(r)), 2u * r - 1u);
+        var row: u32;
+        if face == 0u {
+            row = min(u32((t + 1.0) * f32(r)), 2u * r - 1u);
+        } else {
+            row = min(u32(t * f32(r)), r - 1u);
+        }
+        let depth = textureLoad(atlas, vec2(o.x + col, o.y + o.z - 1u - row), 0).x;
+        var inverse = 0.0;
+        if depth > 0.0 {
+            var d = max(depth / along, params.d_min);
+            if params.has_max != 0u {
+                d = min(d, params.d_max);
+            }
+            inverse = 1.0 / d;
+        } else if params.has_max != 0u {
+            inverse = 1.0 / params.d_max;
+        }
+        let y = inverse - carry;
+        let total = sum + y;
+        carry = (total - sum) - y;
+        sum = total;
+    }
+    if sum > 0.0 {
+        hmd[i] = f32(params.rays) / sum;
+    } else {
+        hmd[i] = bitcast<f32>(0x7f800000u); // every direction escaped: +inf
+    }
+}
