@@ -80,7 +80,7 @@ impl Estimator for Gather {
             "weighting": self.weighting.name(),
             "strata": [grid.0, grid.1],
         });
-        value.as_object().cloned().unwrap_or_default()
+        super::fields(value)
     }
 
     fn estimate(

@@ -58,6 +58,14 @@ pub struct Estimate {
     pub extra: serde_json::Map<String, serde_json::Value>,
 }
 
+/// The fields of a JSON object literal, for [`Estimator::parameters`] and [`Estimate::extra`].
+pub(crate) fn fields(value: serde_json::Value) -> serde_json::Map<String, serde_json::Value> {
+    match value {
+        serde_json::Value::Object(map) => map,
+        _ => serde_json::Map::new(),
+    }
+}
+
 /// One way of computing H per pixel.
 pub trait Estimator: Sync {
     /// The method's name as the CLI spells it (`gather`, `cubemap`, ...).

@@ -100,7 +100,7 @@ impl Estimator for Cubemap {
                 escaped_rays: escaped,
                 // The CPU backend fills a texel at its first lookup: build and lookup interleave.
                 phases: vec![("cubemap_build_and_lookup", start.elapsed().as_secs_f64())],
-                extra: extra.as_object().cloned().unwrap_or_default(),
+                extra: crate::estimators::fields(extra),
             });
         };
         let (hmd, texels, raster, lookup) = gpu::estimate(&gpu, self, context, gbuffer, progress)?;
@@ -115,7 +115,7 @@ impl Estimator for Cubemap {
             rays_cast: 0,
             escaped_rays: 0,
             phases: vec![("cubemap_build", raster), ("cubemap_lookup", lookup)],
-            extra: extra.as_object().cloned().unwrap_or_default(),
+            extra: crate::estimators::fields(extra),
         })
     }
 }

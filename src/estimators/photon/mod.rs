@@ -171,7 +171,7 @@ impl Estimator for PhotonEstimator {
             "max_radius": p.max_radius,
             "normal_filter_cos": NORMAL_FILTER_COS,
         });
-        value.as_object().cloned().unwrap_or_default()
+        crate::estimators::fields(value)
     }
 
     fn estimate(
@@ -223,7 +223,7 @@ impl Estimator for PhotonEstimator {
                 ("photon_index", photon_index),
                 ("gather", gather),
             ],
-            extra: extra.as_object().cloned().unwrap_or_default(),
+            extra: crate::estimators::fields(extra),
         })
     }
 }
