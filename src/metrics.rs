@@ -45,6 +45,52 @@ pub fn f_diff(reference: &HmdImage, test: &HmdImage, l_diag: f32) -> Result<FDif
     })
 }
 
+/// Every figure `hmdist diff` prints, over the pixels finite in both images.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Comparison {
+    pub f_diff: FDiff,
+    /// Root mean square of `H − H_ref`, in scene units.
+    pub rmse: f64,
+    /// Mean of `|H − H_ref| / H_ref` (pixels with `H_ref = 0` left out of this one figure).
+    pub mean_relative_error: f64,
+}
+
+/// `f_diff` (SPEC §4) and the other figures of [`Comparison`].
+pub fn compare(reference: &HmdImage, test: &HmdImage, l_diag: f32) -> Result<Comparison> {
+    let f_diff = f_diff(reference, test, l_diag)?;
+    let (mut squares, mut relative, mut relative_count) = (0.0f64, 0.0f64, 0usize);
+    for (&r, &t) in reference.data.iter().zip(&test.data) {
+        if r.is_finite() && t.is_finite() {
+            let d = t as f64 - r as f64;
+            squares += d * d;
+            if r != 0.0 {
+                relative += (d / r as f64).abs();
+                relative_count += 1;
+            }
+        }
+    }
+    let mean = |sum: f64, n: usize| if n == 0 { f64::NAN } else { sum / n as f64 };
+    Ok(Comparison {
+        f_diff,
+        rmse: mean(squares, f_diff.compared).sqrt(),
+        mean_relative_error: mean(relative, relative_count),
+    })
+}
+
+/// The difference picture of SPEC §4: grey `1 − clamp(10 · s · |ΔH|)`, white where equal;
+/// pixels not finite in both images are black.
+pub fn difference_picture(reference: &HmdImage, test: &HmdImage, scale: f32) -> image::GrayImage {
+    image::GrayImage::from_fn(reference.width, reference.height, |x, y| {
+        let (r, t) = (reference.at(x, y), test.at(x, y));
+        let v = if r.is_finite() && t.is_finite() {
+            1.0 - (10.0 * scale * (r - t).abs()).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        image::Luma([(v * 255.0).round() as u8])
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -65,6 +111,22 @@ mod tests {
         let a = image(vec![1.0, 2.0, 3.0, 4.0]);
         let b = image(vec![1.5, 2.5, 3.5, 4.5]);
         assert!((f_diff(&a, &b, 20.0).unwrap().value - 100.0 * 0.5 / 20.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn rmse_and_relative_error_of_a_constant_offset() {
+        let a = image(vec![1.0, 2.0, 4.0]);
+        let b = image(vec![1.5, 2.5, 4.5]);
+        let c = compare(&a, &b, 1.0).unwrap();
+        assert!((c.rmse - 0.5).abs() < 1e-12);
+        assert!((c.mean_relative_error - (0.5 + 0.25 + 0.125) / 3.0).abs() < 1e-12);
+        let picture = difference_picture(&a, &b, 0.1);
+        assert_eq!(picture.get_pixel(0, 0).0[0], 128, "1 - 10·0.1·0.5 = 0.5");
+        assert_eq!(
+            difference_picture(&a, &a, 0.1).get_pixel(2, 0).0[0],
+            255,
+            "equal is white"
+        );
     }
 
     #[test]

@@ -362,3 +362,28 @@ fn bad_photon_arguments_exit_2_with_a_message_and_no_output() {
         "memory",
     );
 }
+
+#[test]
+fn diff_of_an_image_with_itself_is_zero_and_mismatched_sizes_exit_2() {
+    let dir = workdir("diff");
+    for (out, size) in [("a.exr", "16x12"), ("b.exr", "8x8")] {
+        let r = hmdist(
+            &dir,
+            &[
+                "render", "--quiet", "--scene", "cube", "--size", size, "--rays", "4", "--out", out,
+            ],
+        );
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    }
+    let same = hmdist(&dir, &["diff", "a.exr", "a.exr", "--png", "d.png"]);
+    let text = String::from_utf8_lossy(&same.stdout);
+    assert!(
+        same.status.success() && text.contains("f_diff:              0.000000"),
+        "{text}"
+    );
+    assert!(text.contains("pixels compared:     192"), "{text}");
+    assert!(dir.join("d.png").exists());
+    let mismatch = hmdist(&dir, &["diff", "a.exr", "b.exr"]);
+    assert_eq!(mismatch.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&mismatch.stderr).contains("differ in size"));
+}

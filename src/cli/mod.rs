@@ -2,6 +2,7 @@
 //! exit status 2 (clap's own usage errors exit 2 as well).
 
 mod bar;
+mod diff;
 mod render;
 mod scene;
 
@@ -28,6 +29,8 @@ pub struct Cli {
 enum Command {
     /// Render an HMD image: EXR (H per pixel), PNG (grey picture) and JSON (parameters, timings).
     Render(render::RenderArgs),
+    /// Compare two HMD images: f_diff (SPEC §4), RMSE, mean relative error, difference picture.
+    Diff(diff::DiffArgs),
     /// Inspect or export a scene.
     #[command(subcommand)]
     Scene(scene::SceneCommand),
@@ -36,6 +39,7 @@ enum Command {
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Render(args) => render::run(args),
+        Command::Diff(args) => diff::run(args),
         Command::Scene(command) => scene::run(command),
     }
 }

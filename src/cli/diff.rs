@@ -1,0 +1,68 @@
+//! `hmdist diff REF.exr TEST.exr`: f_diff (SPEC §4) and friends, and the difference picture.
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+
+use hmdist::error::{Error, Result};
+use hmdist::image::{exr, picture};
+use hmdist::metrics::{compare, difference_picture};
+use hmdist::scene::Scene;
+
+#[derive(Args)]
+pub struct DiffArgs {
+    /// The reference image (EXR, channel Y), e.g. gather with 65536 rays.
+    reference: PathBuf,
+    /// The image to compare with it.
+    test: PathBuf,
+    /// Scene giving l_diag (and the display scale) [default: read from REF's JSON sidecar].
+    #[arg(long)]
+    scene: Option<String>,
+    /// Write the difference picture, grey = 1 - clamp(10 * scale * |dH|), white where equal.
+    #[arg(long, value_name = "DIFF.png")]
+    png: Option<PathBuf>,
+    /// Display scale s of the difference picture [default: the scene's].
+    #[arg(long)]
+    scale: Option<f32>,
+}
+
+pub fn run(args: DiffArgs) -> Result<()> {
+    let reference = exr::read(&args.reference)?;
+    let test = exr::read(&args.test)?;
+    let (l_diag, scene_scale) = match &args.scene {
+        Some(name) => {
+            let scene = Scene::load(name)?;
+            (scene.diagonal(), scene.display_scale)
+        }
+        None => from_sidecar(&args.reference)?,
+    };
+    let c = compare(&reference, &test, l_diag)?;
+    println!("f_diff:              {:.6}", c.f_diff.value);
+    println!("rmse:                {:.6}", c.rmse);
+    println!("mean relative error: {:.6}", c.mean_relative_error);
+    println!("pixels compared:     {}", c.f_diff.compared);
+    println!("pixels excluded:     {}", c.f_diff.excluded);
+    println!("l_diag:              {l_diag}");
+    if let Some(png) = &args.png {
+        let scale = args.scale.unwrap_or(scene_scale);
+        picture::write_png(&difference_picture(&reference, &test, scale), png)?;
+        println!("difference picture:  {}", png.display());
+    }
+    Ok(())
+}
+
+/// `l_diag` and the display scale from the JSON that `hmdist render` wrote beside `exr`.
+fn from_sidecar(exr: &Path) -> Result<(f32, f32)> {
+    let json = exr.with_extension("json");
+    let text = std::fs::read_to_string(&json).map_err(|e| {
+        Error::file(
+            &json,
+            format!("cannot read the sidecar for l_diag ({e}): pass --scene"),
+        )
+    })?;
+    let report: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| Error::file(&json, format!("not JSON: {e}")))?;
+    let number = |key: &str| report[key].as_f64().map(|v| v as f32);
+    let l_diag = number("l_diag").ok_or_else(|| Error::file(&json, "has no 'l_diag': pass --scene"))?;
+    Ok((l_diag, number("display_scale").unwrap_or(2.0 / l_diag)))
+}
