@@ -1,6 +1,7 @@
 pub mod accel;
 pub mod error;
 pub mod estimators;
+pub mod experiments;
 pub mod image;
 pub mod metrics;
 pub mod progress;

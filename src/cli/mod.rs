@@ -3,6 +3,7 @@
 
 mod bar;
 mod diff;
+mod experiment;
 mod render;
 mod scene;
 
@@ -31,6 +32,8 @@ enum Command {
     Render(render::RenderArgs),
     /// Compare two HMD images: f_diff (SPEC §4), RMSE, mean relative error, difference picture.
     Diff(diff::DiffArgs),
+    /// Reproduce the paper's analysis on a scene: tables, notes and an HTML report.
+    Experiment(experiment::ExperimentArgs),
     /// Inspect or export a scene.
     #[command(subcommand)]
     Scene(scene::SceneCommand),
@@ -40,6 +43,7 @@ pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Render(args) => render::run(args),
         Command::Diff(args) => diff::run(args),
+        Command::Experiment(args) => experiment::run(args),
         Command::Scene(command) => scene::run(command),
     }
 }

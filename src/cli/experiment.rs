@@ -1,0 +1,65 @@
+//! `hmdist experiment NAME`: the paper's analysis on a scene, as tables and an HTML report.
+
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+
+use hmdist::error::Result;
+use hmdist::experiments::{Preset, Runner, EXPERIMENTS};
+
+use super::bar::Bar;
+
+#[derive(Args)]
+pub struct ExperimentArgs {
+    /// Experiment: all, table1 (f_diff vs rays), table2 (seconds vs rays), table4 (photon map
+    /// build), memory (bytes per photon).
+    name: String,
+    /// Scene: a built-in (cube, hall, sphere, slab, dome) or a file.
+    #[arg(long, default_value = "cube")]
+    scene: String,
+    /// quick: 48², reference 16384 rays, minutes; paper: 1024², reference 65536 rays, hours.
+    #[arg(long, value_enum, default_value_t = PresetArg::Quick)]
+    preset: PresetArg,
+    /// Output folder: tables (CSV, Markdown), index.html, and the image cache that reruns reuse.
+    #[arg(long, default_value = "experiments")]
+    out: PathBuf,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum PresetArg {
+    Quick,
+    Paper,
+}
+
+pub fn run(args: ExperimentArgs) -> Result<()> {
+    let preset = match args.preset {
+        PresetArg::Quick => Preset::Quick,
+        PresetArg::Paper => Preset::Paper,
+    };
+    if args.name != "all" && !EXPERIMENTS.contains(&args.name.as_str()) {
+        return Err(hmdist::error::Error::parameter(format!(
+            "unknown experiment '{}': expected all or one of {}",
+            args.name,
+            EXPERIMENTS.join(", ")
+        )));
+    }
+    let bar = Bar::new(args.quiet);
+    let mut runner = Runner::new(&args.scene, preset, &args.out, &bar)?;
+    runner.run(&args.name)?;
+    if !args.quiet {
+        for section in &runner.sections {
+            for table in &section.tables {
+                println!("{}", table.markdown());
+            }
+            for note in &section.notes {
+                println!("- {note}");
+            }
+            println!();
+        }
+        println!("report: {}", args.out.join("index.html").display());
+    }
+    Ok(())
+}

@@ -1,0 +1,69 @@
+//! `index.html`: every experiment's tables, the paper's values beside ours, notes on the
+//! paper's findings, and links to the files written. Links only files that exist.
+
+use std::fmt::Write as _;
+
+use super::{Runner, Table};
+use crate::error::Result;
+use crate::image::write_atomically;
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+}
+
+fn html_table(t: &Table) -> String {
+    let mut out = format!("<h3>{}</h3>\n<table>\n<tr>", escape(&t.title));
+    for h in &t.header {
+        let _ = write!(out, "<th>{}</th>", escape(h));
+    }
+    out += "</tr>\n";
+    for row in &t.rows {
+        out += "<tr>";
+        for cell in row {
+            let _ = write!(out, "<td>{}</td>", escape(cell));
+        }
+        out += "</tr>\n";
+    }
+    out + "</table>\n"
+}
+
+pub fn write(runner: &Runner) -> Result<()> {
+    let mut body = format!(
+        "<h1>hmdist experiments: <code>{}</code>, preset {}</h1>\n<p>{}² pixels, reference: gather with {} rays. \
+         f_diff is SPEC §4's mean |ΔH| in percent of the scene diagonal ({:.3}).</p>\n",
+        escape(&runner.scene.name),
+        runner.preset.name(),
+        runner.params.size,
+        runner.params.reference_rays,
+        runner.scene.diagonal()
+    );
+    for section in &runner.sections {
+        let _ = writeln!(body, "<h2 id=\"{0}\">{0}</h2>", escape(&section.name));
+        for table in &section.tables {
+            body += &html_table(table);
+        }
+        if !section.notes.is_empty() {
+            body += "<ul>\n";
+            for note in &section.notes {
+                let _ = writeln!(body, "<li>{}</li>", escape(note));
+            }
+            body += "</ul>\n";
+        }
+        let links: Vec<String> = section
+            .files
+            .iter()
+            .filter(|f| f.exists())
+            .filter_map(|f| f.strip_prefix(&runner.out).ok())
+            .map(|f| format!("<a href=\"{0}\">{0}</a>", escape(&f.to_string_lossy())))
+            .collect();
+        if !links.is_empty() {
+            let _ = writeln!(body, "<p>Files: {}</p>", links.join(" · "));
+        }
+    }
+    let page = format!(
+        "<!doctype html>\n<html><head><meta charset=\"utf-8\"><title>hmdist experiments</title>\n\
+         <style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}}table{{border-collapse:collapse}}\
+         td,th{{border:1px solid #ccc;padding:2px 8px;text-align:right}}</style></head><body>\n{body}</body></html>\n"
+    );
+    write_atomically(&runner.out.join("index.html"), page.as_bytes())
+}
