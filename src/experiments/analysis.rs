@@ -3,6 +3,7 @@
 
 use std::time::Instant;
 
+use super::plot::{log_log, Series};
 use super::{Runner, Section, Table, REFERENCE_SEED};
 use crate::accel::{Accel, BuildQuality};
 use crate::error::Result;
@@ -95,6 +96,19 @@ pub fn table1(runner: &Runner) -> Result<Section> {
     }
     let mut files = ours.write(&runner.out, "table1")?;
     files.extend(paper.write(&runner.out, "table1_paper")?);
+    let plot = runner.out.join("table1.svg");
+    let series = |label: &str, pick: fn(&(u32, f64, f64, f64, f64)) -> f64| Series {
+        label: label.into(),
+        points: sweep.rows.iter().map(|r| (r.0 as f64, pick(r))).collect(),
+    };
+    log_log(
+        &plot,
+        "f_diff against the reference",
+        "gather rays N",
+        "f_diff (% of l_diag)",
+        &[series("gather", |r| r.1), series("cubemap R = 64 (cpu)", |r| r.2)],
+    )?;
+    files.push(plot);
     Ok(Section {
         name: "table1".into(),
         notes: table1_notes(&sweep),
@@ -162,6 +176,19 @@ pub fn table2(runner: &Runner) -> Result<Section> {
     };
     let mut files = ours.write(&runner.out, "table2")?;
     files.extend(paper.write(&runner.out, "table2_paper")?);
+    let plot = runner.out.join("table2.svg");
+    let series = |label: &str, pick: fn(&(u32, f64, f64, f64, f64)) -> f64| Series {
+        label: label.into(),
+        points: sweep.rows.iter().map(|r| (r.0 as f64, pick(r))).collect(),
+    };
+    log_log(
+        &plot,
+        "seconds per image",
+        "gather rays N",
+        "seconds",
+        &[series("gather", |r| r.3), series("cubemap R = 64 (cpu)", |r| r.4)],
+    )?;
+    files.push(plot);
     Ok(Section {
         name: "table2".into(),
         tables: vec![ours, paper],
@@ -191,8 +218,15 @@ pub fn table4(runner: &Runner) -> Result<Section> {
         ),
         &["photons", "source", "trace s", "kd-tree s", "total s"],
     );
+    let mut series: Vec<Series> = sources
+        .iter()
+        .map(|(name, _)| Series {
+            label: format!("{name} source"),
+            points: vec![],
+        })
+        .collect();
     for &photons in &p.photons {
-        for (name, source) in &sources {
+        for ((name, source), series) in sources.iter().zip(&mut series) {
             let start = Instant::now();
             let traced = trace_photons(&accel, source, rules, photons, 1, &|_| {})?;
             let trace = start.elapsed().as_secs_f64();
@@ -200,6 +234,7 @@ pub fn table4(runner: &Runner) -> Result<Section> {
             let map = PhotonMap::build(&traced.photons, PhotonMethod::StoredDistance)?;
             let index = start.elapsed().as_secs_f64();
             drop(map);
+            series.points.push((photons as f64, trace + index));
             ours.push(vec![
                 photons.to_string(),
                 name.to_string(),
@@ -218,6 +253,15 @@ pub fn table4(runner: &Runner) -> Result<Section> {
     }
     let mut files = ours.write(&runner.out, "table4")?;
     files.extend(paper.write(&runner.out, "table4_paper")?);
+    let plot = runner.out.join("table4.svg");
+    log_log(
+        &plot,
+        "photon map build (trace + kd-tree)",
+        "photons stored",
+        "seconds",
+        &series,
+    )?;
+    files.push(plot);
     Ok(Section {
         name: "table4".into(),
         tables: vec![ours, paper],

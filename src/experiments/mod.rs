@@ -10,6 +10,7 @@
 //! `fig12`–`fig17`), `table3`, `fig10` and the plots are still to come.
 
 mod analysis;
+pub mod plot;
 mod report;
 pub mod table;
 

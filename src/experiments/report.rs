@@ -49,6 +49,19 @@ pub fn write(runner: &Runner) -> Result<()> {
             }
             body += "</ul>\n";
         }
+        for svg in section
+            .files
+            .iter()
+            .filter(|f| f.extension().is_some_and(|e| e == "svg") && f.exists())
+        {
+            if let Ok(name) = svg.strip_prefix(&runner.out) {
+                let _ = writeln!(
+                    body,
+                    "<p><img src=\"{0}\" alt=\"{0}\"></p>",
+                    escape(&name.to_string_lossy())
+                );
+            }
+        }
         let links: Vec<String> = section
             .files
             .iter()
