@@ -3,6 +3,7 @@
 
 use std::time::Instant;
 
+use super::grid::{write_grid, Tile};
 use super::plot::{log_log, Series};
 use super::{Runner, Section, Table, REFERENCE_SEED};
 use crate::accel::{Accel, BuildQuality};
@@ -12,6 +13,8 @@ use crate::estimators::photon::{
     trace_photons, PathRules, PhotonMap, PhotonMethod, PhotonSource, DEFAULT_ABSORPTION,
 };
 use crate::estimators::{Cubemap, Gather};
+use crate::image::picture::grey;
+use crate::metrics::difference_picture;
 use crate::metrics::f_diff;
 use crate::sampling::Weighting;
 
@@ -34,6 +37,9 @@ const PAPER_TABLE2: [(u32, f64, f64); 7] = [
 struct RaySweep {
     rows: Vec<(u32, f64, f64, f64, f64)>,
     excluded: usize,
+    reference: crate::image::HmdImage,
+    /// Gather's image per ray count.
+    gathered: Vec<crate::image::HmdImage>,
 }
 
 /// Renders the reference and, for each ray count, gather and the cube map (CPU backend).
@@ -43,6 +49,7 @@ fn ray_sweep(runner: &Runner) -> Result<RaySweep> {
     let (reference, _) = runner.image(&reference, REFERENCE_SEED)?;
     let l_diag = runner.scene.diagonal();
     let mut rows = vec![];
+    let mut gathered = vec![];
     let mut excluded = 0;
     for &rays in &p.rays {
         let gather = Gather::new(rays, Weighting::Cosine)?;
@@ -53,8 +60,14 @@ fn ray_sweep(runner: &Runner) -> Result<RaySweep> {
         let (fg, fc) = (f_diff(&reference, &g, l_diag)?, f_diff(&reference, &c, l_diag)?);
         excluded = excluded.max(fg.excluded).max(fc.excluded);
         rows.push((rays, fg.value, fc.value, seconds(&g_report), seconds(&c_report)));
+        gathered.push(g);
     }
-    Ok(RaySweep { rows, excluded })
+    Ok(RaySweep {
+        rows,
+        excluded,
+        reference,
+        gathered,
+    })
 }
 
 /// Table 1: f_diff against the reference by number of gather rays, gather and cube map.
@@ -109,6 +122,7 @@ pub fn table1(runner: &Runner) -> Result<Section> {
         &[series("gather", |r| r.1), series("cubemap R = 64 (cpu)", |r| r.2)],
     )?;
     files.push(plot);
+    files.extend(ray_grids(runner, &sweep)?);
     Ok(Section {
         name: "table1".into(),
         notes: table1_notes(&sweep),
@@ -294,6 +308,87 @@ pub fn memory(runner: &Runner) -> Result<Section> {
     )];
     Ok(Section {
         name: "memory".into(),
+        tables: vec![table],
+        files,
+        notes,
+    })
+}
+
+/// Fig. 12 and 13: gather's HMD picture and its difference picture against the reference,
+/// per ray count.
+fn ray_grids(runner: &Runner, sweep: &RaySweep) -> Result<Vec<std::path::PathBuf>> {
+    let s = runner.scene.display_scale;
+    let mut hmd = vec![Some(Tile {
+        caption: format!("ref {}", runner.params.reference_rays),
+        picture: grey(&sweep.reference, s),
+    })];
+    let mut diff = vec![];
+    for (row, image) in sweep.rows.iter().zip(&sweep.gathered) {
+        hmd.push(Some(Tile {
+            caption: format!("N={}", row.0),
+            picture: grey(image, s),
+        }));
+        diff.push(Some(Tile {
+            caption: format!("N={}", row.0),
+            picture: difference_picture(&sweep.reference, image, s),
+        }));
+    }
+    let (fig12, fig13) = (runner.out.join("fig12.png"), runner.out.join("fig13.png"));
+    write_grid(&fig12, &hmd, 4)?;
+    write_grid(&fig13, &diff, 4)?;
+    Ok(vec![fig12, fig13])
+}
+
+/// Fig. 9: gather against the cube map at R = 64 and 128, all at the reference ray count,
+/// with difference pictures.
+pub fn fig9(runner: &Runner) -> Result<Section> {
+    let p = &runner.params;
+    let gather = Gather::new(p.reference_rays, Weighting::Cosine)?;
+    let (g, _) = runner.image(&gather, 1)?;
+    let l_diag = runner.scene.diagonal();
+    let s = runner.scene.display_scale;
+    let mut table = Table::new(
+        &format!(
+            "Fig. 9 ({}): cube map against gather, {} rays, {}²",
+            runner.preset.name(),
+            p.reference_rays,
+            p.size
+        ),
+        &["R", "f_diff", "pixels compared"],
+    );
+    let mut top = vec![Some(Tile {
+        caption: "gather".into(),
+        picture: grey(&g, s),
+    })];
+    let mut bottom = vec![None];
+    for r in [64, 128] {
+        let (c, _) = runner.image(&Cubemap::new(gather, r, Backend::Cpu)?, 1)?;
+        let d = f_diff(&g, &c, l_diag)?;
+        table.push(vec![
+            r.to_string(),
+            format!("{:.4}", d.value),
+            d.compared.to_string(),
+        ]);
+        top.push(Some(Tile {
+            caption: format!("cube R={r}"),
+            picture: grey(&c, s),
+        }));
+        bottom.push(Some(Tile {
+            caption: format!("diff R={r}"),
+            picture: difference_picture(&g, &c, s),
+        }));
+    }
+    let path = runner.out.join("fig9.png");
+    top.extend(bottom);
+    write_grid(&path, &top, 3)?;
+    let mut files = table.write(&runner.out, "fig9")?;
+    files.push(path);
+    let notes = vec![format!(
+        "Paper: CPU vs GPU at 65,536 rays differ by 0.029104 (R = 64) and 0.029091 (R = 128). Here: {} (R = 64) and {} (R = 128).",
+        table.rows[0][1], table.rows[1][1]
+    )];
+    Ok(Section {
+        name: "fig9".into(),
         tables: vec![table],
         files,
         notes,

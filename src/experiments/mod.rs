@@ -6,10 +6,12 @@
 //! determines it (scene, method, parameters, size, seed), and reused across experiments and
 //! reruns: an interrupted run resumes where it stopped.
 //!
-//! Implemented so far: `table1`, `table2`, `table4`, `memory`. The image grids (`fig9`,
-//! `fig12`–`fig17`), `table3`, `fig10` and the plots are still to come.
+//! Implemented so far: `table1` (with its grids `fig12`, `fig13` and a plot), `table2`,
+//! `fig9`, `table4`, `memory`. Still to come: `table3` with `fig14`/`fig15`, `fig10`,
+//! `fig16`/`fig17`.
 
 mod analysis;
+pub mod grid;
 pub mod plot;
 mod report;
 pub mod table;
@@ -27,7 +29,7 @@ use crate::scene::Scene;
 pub use table::Table;
 
 /// Experiments by name, in the order `all` runs them.
-pub const EXPERIMENTS: [&str; 4] = ["table1", "table2", "table4", "memory"];
+pub const EXPERIMENTS: [&str; 5] = ["table1", "table2", "fig9", "table4", "memory"];
 
 /// Seed of the reference images: independent of the seed of the images compared with them.
 pub const REFERENCE_SEED: u64 = 1_000_003;
@@ -135,12 +137,14 @@ impl<'a> Runner<'a> {
             // Images each experiment may render (cached ones take no time).
             let images = match name {
                 "table1" | "table2" => 1 + 2 * self.params.rays.len() as u64,
+                "fig9" => 3,
                 _ => 0,
             };
             self.progress.start(name, images);
             let section = match name {
                 "table1" => analysis::table1(self)?,
                 "table2" => analysis::table2(self)?,
+                "fig9" => analysis::fig9(self)?,
                 "table4" => analysis::table4(self)?,
                 "memory" => analysis::memory(self)?,
                 _ => {

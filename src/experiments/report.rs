@@ -52,9 +52,9 @@ pub fn write(runner: &Runner) -> Result<()> {
         for svg in section
             .files
             .iter()
-            .filter(|f| f.extension().is_some_and(|e| e == "svg") && f.exists())
+            .filter(|f| f.extension().is_some_and(|e| e == "svg" || e == "png") && f.exists())
         {
-            if let Ok(name) = svg.strip_prefix(&runner.out) {
+            if let Ok(name) = picture.strip_prefix(&runner.out) {
                 let _ = writeln!(
                     body,
                     "<p><img src=\"{0}\" alt=\"{0}\"></p>",
