@@ -49,7 +49,7 @@ pub fn write(runner: &Runner) -> Result<()> {
             }
             body += "</ul>\n";
         }
-        for svg in section
+        for picture in section
             .files
             .iter()
             .filter(|f| f.extension().is_some_and(|e| e == "svg" || e == "png") && f.exists())
