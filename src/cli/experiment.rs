@@ -11,8 +11,9 @@ use super::bar::Bar;
 
 #[derive(Args)]
 pub struct ExperimentArgs {
-    /// Experiment: all, table1 (f_diff vs rays), table2 (seconds vs rays), table4 (photon map
-    /// build), memory (bytes per photon).
+    /// Experiment: all, table1 (f_diff vs rays, fig12/fig13), table2 (seconds vs rays), fig9
+    /// (gather vs cube map), table3 (photons x K, fig14/fig15), fig10 (methods I and II),
+    /// table4 (photon map build), fig16_17 (source x bounces x K x photons), memory.
     name: String,
     /// Scene: a built-in (cube, hall, sphere, slab, dome) or a file.
     #[arg(long, default_value = "cube")]

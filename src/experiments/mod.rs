@@ -6,9 +6,8 @@
 //! determines it (scene, method, parameters, size, seed), and reused across experiments and
 //! reruns: an interrupted run resumes where it stopped.
 //!
-//! Implemented so far: `table1` (with its grids `fig12`, `fig13` and a plot), `table2`,
-//! `fig9`, `table4`, `memory`. Still to come: `table3` with `fig14`/`fig15`, `fig10`,
-//! `fig16`/`fig17`.
+//! Experiments: `table1` (with its grids `fig12`, `fig13` and a plot), `table2`, `fig9`,
+//! `table3` (with `fig14`, `fig15`), `fig10`, `table4`, `fig16_17`, `memory`.
 
 mod analysis;
 pub mod grid;
@@ -29,7 +28,9 @@ use crate::scene::Scene;
 pub use table::Table;
 
 /// Experiments by name, in the order `all` runs them.
-pub const EXPERIMENTS: [&str; 5] = ["table1", "table2", "fig9", "table4", "memory"];
+pub const EXPERIMENTS: [&str; 8] = [
+    "table1", "table2", "fig9", "table3", "fig10", "table4", "fig16_17", "memory",
+];
 
 /// Seed of the reference images: independent of the seed of the images compared with them.
 pub const REFERENCE_SEED: u64 = 1_000_003;
@@ -50,6 +51,12 @@ pub struct PresetParams {
     pub reference_rays: u32,
     pub rays: Vec<u32>,
     pub photons: Vec<usize>,
+    /// Photons gathered per pixel (K) for Table 3 and Fig. 16/17.
+    pub gathers: Vec<usize>,
+    /// Photon counts of Fig. 16/17.
+    pub fig16_photons: Vec<usize>,
+    /// Photons and K of Fig. 10.
+    pub fig10: (usize, usize),
     pub cube_res: u32,
 }
 
@@ -69,6 +76,9 @@ impl Preset {
                 reference_rays: 16_384,
                 rays: doubling(32, 2048).collect(),
                 photons: vec![130_000, 260_000, 530_000, 1_060_000],
+                gathers: vec![64, 256, 1024],
+                fig16_photons: vec![260_000, 1_060_000],
+                fig10: (1_060_000, 4096),
                 cube_res: 64,
             },
             Preset::Paper => PresetParams {
@@ -78,6 +88,9 @@ impl Preset {
                 photons: vec![
                     130_000, 260_000, 530_000, 1_060_000, 2_130_000, 4_260_000, 8_530_000,
                 ],
+                gathers: vec![64, 128, 256, 512, 1024],
+                fig16_photons: vec![1_060_000, 8_530_000],
+                fig10: (8_530_000, 65_536),
                 cube_res: 64,
             },
         }
@@ -138,6 +151,9 @@ impl<'a> Runner<'a> {
             let images = match name {
                 "table1" | "table2" => 1 + 2 * self.params.rays.len() as u64,
                 "fig9" => 3,
+                "table3" => 1 + 2 * (self.params.photons.len() * self.params.gathers.len()) as u64,
+                "fig10" => 3,
+                "fig16_17" => 1 + 4 * (self.params.fig16_photons.len() * self.params.gathers.len()) as u64,
                 _ => 0,
             };
             self.progress.start(name, images);
@@ -145,6 +161,9 @@ impl<'a> Runner<'a> {
                 "table1" => analysis::table1(self)?,
                 "table2" => analysis::table2(self)?,
                 "fig9" => analysis::fig9(self)?,
+                "table3" => analysis::table3(self)?,
+                "fig10" => analysis::fig10(self)?,
+                "fig16_17" => analysis::fig16_17(self)?,
                 "table4" => analysis::table4(self)?,
                 "memory" => analysis::memory(self)?,
                 _ => {
