@@ -43,6 +43,16 @@ struct RaySweep {
     gathered: Vec<crate::image::HmdImage>,
 }
 
+impl RaySweep {
+    /// One column of the rows against the ray count, for a plot.
+    fn series(&self, label: &str, pick: fn(&(u32, f64, f64, f64, f64)) -> f64) -> Series {
+        Series {
+            label: label.into(),
+            points: self.rows.iter().map(|r| (r.0 as f64, pick(r))).collect(),
+        }
+    }
+}
+
 /// Renders the reference and, for each ray count, gather and the cube map (CPU backend).
 fn ray_sweep(runner: &Runner) -> Result<RaySweep> {
     let p = &runner.params;
@@ -111,16 +121,15 @@ pub fn table1(runner: &Runner) -> Result<Section> {
     let mut files = ours.write(&runner.out, "table1")?;
     files.extend(paper.write(&runner.out, "table1_paper")?);
     let plot = runner.out.join("table1.svg");
-    let series = |label: &str, pick: fn(&(u32, f64, f64, f64, f64)) -> f64| Series {
-        label: label.into(),
-        points: sweep.rows.iter().map(|r| (r.0 as f64, pick(r))).collect(),
-    };
     log_log(
         &plot,
         "f_diff against the reference",
         "gather rays N",
         "f_diff (% of l_diag)",
-        &[series("gather", |r| r.1), series("cubemap R = 64 (cpu)", |r| r.2)],
+        &[
+            sweep.series("gather", |r| r.1),
+            sweep.series("cubemap R = 64 (cpu)", |r| r.2),
+        ],
     )?;
     files.push(plot);
     files.extend(ray_grids(runner, &sweep)?);
@@ -192,16 +201,15 @@ pub fn table2(runner: &Runner) -> Result<Section> {
     let mut files = ours.write(&runner.out, "table2")?;
     files.extend(paper.write(&runner.out, "table2_paper")?);
     let plot = runner.out.join("table2.svg");
-    let series = |label: &str, pick: fn(&(u32, f64, f64, f64, f64)) -> f64| Series {
-        label: label.into(),
-        points: sweep.rows.iter().map(|r| (r.0 as f64, pick(r))).collect(),
-    };
     log_log(
         &plot,
         "seconds per image",
         "gather rays N",
         "seconds",
-        &[series("gather", |r| r.3), series("cubemap R = 64 (cpu)", |r| r.4)],
+        &[
+            sweep.series("gather", |r| r.3),
+            sweep.series("cubemap R = 64 (cpu)", |r| r.4),
+        ],
     )?;
     files.push(plot);
     Ok(Section {
