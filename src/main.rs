@@ -8,11 +8,33 @@ use clap::Parser;
 
 fn main() -> ExitCode {
     let args = cli::Cli::parse();
-    match cli::run(args) {
+    let runtime_dir = quiet_headless_vulkan();
+    let code = match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
             eprintln!("hmdist: error: {err}");
             ExitCode::from(2)
         }
+    };
+    if let Some(dir) = runtime_dir {
+        let _ = std::fs::remove_dir(dir);
     }
+    code
+}
+
+/// On a headless Linux machine Mesa's Vulkan driver, probed by the cube map's GPU backend,
+/// prints "XDG_RUNTIME_DIR is invalid or not set" when that variable is unset. Point it at a
+/// private empty folder for the life of the process (still single-threaded here); returns the
+/// folder to remove at exit.
+fn quiet_headless_vulkan() -> Option<std::path::PathBuf> {
+    #[cfg(target_os = "linux")]
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        use std::os::unix::fs::DirBuilderExt;
+        let dir = std::env::temp_dir().join(format!("hmdist-runtime-{}", std::process::id()));
+        if std::fs::DirBuilder::new().mode(0o700).create(&dir).is_ok() {
+            std::env::set_var("XDG_RUNTIME_DIR", &dir);
+            return Some(dir);
+        }
+    }
+    None
 }
