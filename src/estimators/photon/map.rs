@@ -85,7 +85,6 @@ enum Payloads {
 pub struct PhotonMap {
     tree: ImmutableKdTree<f32, u32, 3, BUCKET>,
     payloads: Payloads,
-    len: usize,
 }
 
 impl PhotonMap {
@@ -122,19 +121,7 @@ impl PhotonMap {
                     .collect(),
             ),
         };
-        Ok(PhotonMap {
-            tree,
-            payloads,
-            len: photons.len(),
-        })
-    }
-
-    pub fn len(&self) -> usize {
-        self.len
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.len == 0
+        Ok(PhotonMap { tree, payloads })
     }
 
     /// Calls `accept(distance)` for each of the `k` photons nearest `x` (within `max_radius`)
