@@ -1,60 +1,130 @@
-//! Gather throughput and BVH build time on the built-in scenes (issue: foundation).
+//! Gather throughput, BVH build time and traversal figures on the built-in scenes
+//! (issue: ray-casting engine).
 //!
-//! `cargo bench --bench gather` prints, per scene: BVH build seconds for each preset, and
-//! gather Mrays/s at 256×256 pixels × 256 rays (all cores, then one thread). Set
-//! `HMDIST_BENCH_SCENES=cube` to run a subset, `HMDIST_BENCH_SIZE=128` for a smaller image.
+//! `cargo bench --bench gather` prints, per scene and BVH preset: build seconds, bytes per
+//! triangle, and for each ray count N: gather Mrays/s with all cores and with one thread,
+//! nodes and leaf blocks (of 8 triangles) visited per ray. Environment:
+//! `HMDIST_BENCH_SCENES=cube,hall` (default), `HMDIST_BENCH_SIZE=256` (image side),
+//! `HMDIST_BENCH_RAYS=64,256,4096` (N; fewer pixels are used for large N so that each run
+//! casts about 16.8 M rays), `HMDIST_BENCH_PRESETS=fast,high`, `HMDIST_BENCH_KERNELS=` (e.g.
+//! `scalar,avx2,avx512`; default: the best kernel).
 //! Figures, not pass/fail: compare as ratios within one run (timings drift ±10 %).
 
 use std::time::Instant;
 
-use hmdist::accel::{Accel, BuildQuality};
-use hmdist::estimators::{DistanceClamp, EstimateContext, Estimator, Gather};
+use hmdist::accel::{Accel, BuildQuality, Kernel, TraversalStats};
+use hmdist::estimators::{DistanceClamp, EstimateContext, Estimator, GBuffer, Gather};
 use hmdist::progress::Silent;
 use hmdist::render::primary_hits;
 use hmdist::sampling::Weighting;
 use hmdist::scene::Scene;
 
+fn list(name: &str, default: &str) -> Vec<String> {
+    std::env::var(name)
+        .unwrap_or_else(|_| default.into())
+        .split(',')
+        .map(|s| s.trim().to_string())
+        .filter(|s| !s.is_empty())
+        .collect()
+}
+
 fn main() {
-    let scenes = std::env::var("HMDIST_BENCH_SCENES").unwrap_or_else(|_| "cube,hall".into());
     let size: u32 = std::env::var("HMDIST_BENCH_SIZE")
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(256);
-    let rays = 256;
-    println!("scene  triangles  preset  build_s  threads  Mrays/s  escaped");
-    for name in scenes.split(',') {
-        let scene = Scene::load(name).expect("built-in scene");
-        for quality in [BuildQuality::Fast, BuildQuality::High] {
-            let start = Instant::now();
-            let accel = Accel::build(&scene.mesh, quality);
-            let build = start.elapsed().as_secs_f64();
-            let gbuffer = primary_hits(&accel, &scene, size, size);
-            let context = EstimateContext {
-                accel: &accel,
-                scene: &scene,
-                seed: 1,
-                clamp: DistanceClamp::for_diagonal(scene.diagonal(), None),
+    let kernels: Vec<Kernel> = list("HMDIST_BENCH_KERNELS", Kernel::best().name())
+        .iter()
+        .map(|k| Kernel::parse(k).expect("a kernel this CPU has"))
+        .collect();
+    println!(
+        "scene  triangles  preset  build_s  B/tri  kernel   rays  pixels  Mrays/s(all)  Mrays/s(1)  nodes/ray  blocks/ray  escaped"
+    );
+    for name in list("HMDIST_BENCH_SCENES", "cube,hall") {
+        let scene = Scene::load(&name).expect("built-in scene");
+        for preset in list("HMDIST_BENCH_PRESETS", "fast,high") {
+            let quality = match preset.as_str() {
+                "fast" => BuildQuality::Fast,
+                _ => BuildQuality::High,
             };
-            let gather = Gather::new(rays, Weighting::Cosine).unwrap();
-            let all = rayon::current_num_threads();
-            for threads in [all, 1] {
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .build()
-                    .unwrap();
-                let start = Instant::now();
-                let estimate = pool
-                    .install(|| gather.estimate(&context, &gbuffer, &Silent))
-                    .unwrap();
-                let seconds = start.elapsed().as_secs_f64();
-                println!(
-                    "{name:<6} {:>9}  {:<6} {build:>7.2}  {threads:>7}  {:>7.2}  {:>7}",
-                    scene.mesh.triangle_count(),
-                    format!("{quality:?}").to_lowercase(),
-                    estimate.rays_cast as f64 / seconds / 1e6,
-                    estimate.escaped_rays,
-                );
+            let start = Instant::now();
+            let built = Accel::build(&scene.mesh, quality);
+            let build = start.elapsed().as_secs_f64();
+            let bytes_per_triangle = built.size().2 as f64 / scene.mesh.triangle_count() as f64;
+            let mut accel = Some(built);
+            for &kernel in &kernels {
+                let a = accel.take().unwrap().with_kernel(kernel);
+                for rays in list("HMDIST_BENCH_RAYS", "64,256,4096") {
+                    let rays: u32 = rays.parse().expect("a ray count");
+                    // About 16.8 M rays per run: fewer pixels for more rays.
+                    let side = ((16_777_216.0 / rays as f64).sqrt() as u32).clamp(8, size);
+                    let gbuffer = primary_hits(&a, &scene, side, side);
+                    let (all, one, escaped) = throughput(&a, &scene, &gbuffer, rays);
+                    let stats = traversal(&a, &gbuffer, rays);
+                    println!(
+                        "{name:<6} {:>9}  {preset:<6} {build:>7.2}  {bytes_per_triangle:>5.0}  {:<7} {rays:>5}  {:>5}²  {all:>12.2}  {one:>10.2}  {:>9.2}  {:>10.2}  {escaped:>7}",
+                        scene.mesh.triangle_count(),
+                        kernel.name(),
+                        side,
+                        stats.nodes as f64 / stats_rays(&gbuffer, rays) as f64,
+                        stats.blocks as f64 / stats_rays(&gbuffer, rays) as f64,
+                    );
+                }
+                accel = Some(a);
             }
         }
     }
+}
+
+/// Mrays/s with all cores and with one thread, and the escaped rays.
+fn throughput(accel: &Accel, scene: &Scene, gbuffer: &GBuffer, rays: u32) -> (f64, f64, u64) {
+    let context = EstimateContext {
+        accel,
+        scene,
+        seed: 1,
+        clamp: DistanceClamp::for_diagonal(scene.diagonal(), None),
+    };
+    let gather = Gather::new(rays, Weighting::Cosine).unwrap();
+    let mut figures = [0.0; 2];
+    let mut escaped = 0;
+    for (i, threads) in [rayon::current_num_threads(), 1].into_iter().enumerate() {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let start = Instant::now();
+        let estimate = pool
+            .install(|| gather.estimate(&context, gbuffer, &Silent))
+            .unwrap();
+        figures[i] = estimate.rays_cast as f64 / start.elapsed().as_secs_f64() / 1e6;
+        escaped = estimate.escaped_rays;
+    }
+    (figures[0], figures[1], escaped)
+}
+
+/// Pixels sampled for the traversal counts: every 7th surface pixel.
+fn stats_pixels(gbuffer: &GBuffer) -> impl Iterator<Item = (usize, &hmdist::accel::Hit)> {
+    gbuffer
+        .points
+        .iter()
+        .enumerate()
+        .filter_map(|(i, p)| p.as_ref().map(|h| (i, h)))
+        .step_by(7)
+}
+
+fn stats_rays(gbuffer: &GBuffer, rays: u32) -> u64 {
+    stats_pixels(gbuffer).count() as u64 * rays as u64
+}
+
+/// Nodes and leaf blocks visited by the same gather rays as the estimator casts.
+fn traversal(accel: &Accel, gbuffer: &GBuffer, rays: u32) -> TraversalStats {
+    let gather = Gather::new(rays, Weighting::Cosine).unwrap();
+    let mut stats = TraversalStats::default();
+    for (pixel, hit) in stats_pixels(gbuffer) {
+        let (origin, directions) = gather.rays(hit, 1, pixel as u64);
+        for dir in directions {
+            accel.hit_distance_counted(origin, dir, f32::INFINITY, Some(hit.triangle), &mut stats);
+        }
+    }
+    stats
 }

@@ -8,7 +8,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde_json::{json, Value};
 
-use crate::accel::{Accel, BuildQuality, RayCaster};
+use crate::accel::{Accel, BuildQuality, Kernel, RayCaster};
 use crate::error::{Error, Result};
 use crate::estimators::{DistanceClamp, EstimateContext, Estimator, GBuffer};
 use crate::image::HmdImage;
@@ -107,8 +107,9 @@ fn render_in_pool(
     load_seconds: f64,
     progress: &dyn Progress,
 ) -> Result<Rendered> {
+    let kernel = Kernel::from_env()?;
     let start = Instant::now();
-    let accel = Accel::build(&scene.mesh, options.bvh_quality);
+    let accel = Accel::build(&scene.mesh, options.bvh_quality).with_kernel(kernel);
     let accel_build = start.elapsed().as_secs_f64();
 
     let primary_start = Instant::now();
@@ -145,6 +146,7 @@ fn render_in_pool(
         "height": options.height,
         "seed": options.seed,
         "threads": rayon::current_num_threads(),
+        "kernel": kernel.name(),
         "max_distance": options.max_distance,
         "triangles": scene.mesh.triangle_count(),
         "l_diag": l_diag,

@@ -98,3 +98,74 @@ fn a_point_a_few_ulps_from_a_second_wall_still_sees_that_wall() {
     let (_, report) = common::gather(&scene, 640, 480, 16, Weighting::Cosine, None);
     assert_eq!(report["escaped_rays"], 0);
 }
+
+#[test]
+fn a_ray_leaving_a_face_does_not_hit_its_coincident_duplicate() {
+    // McGuire's Cornell box OBJ: the tall box's "bottom" face repeats the vertices of its
+    // front face. Alone in space, every gather ray leaving such a face escapes; a ray that
+    // took the duplicate's within-error hit came out at H ≈ 0.001 (issue: ray-casting
+    // engine). Frequent on a face slightly tilted from z = 0: the hit points' error bound in z,
+    // and so the origin offset, is tiny against the face's size.
+    let plane = |x: f32, y: f32| Vec3::new(x, y, 0.01 * x + 0.02 * y);
+    let corners = [
+        plane(-1.0, -1.0),
+        plane(1.0, -1.0),
+        plane(1.0, 1.0),
+        plane(-1.0, 1.0),
+    ];
+    let mut mesh = hmdist::scene::Mesh::new();
+    let first = mesh.add_vertices(corners);
+    let duplicate = mesh.add_vertices(corners);
+    mesh.indices = vec![
+        [first, first + 1, first + 2],
+        [first, first + 2, first + 3],
+        // The duplicate, split along the other diagonal, opposite winding.
+        [duplicate + 1, duplicate, duplicate + 3],
+        [duplicate + 1, duplicate + 3, duplicate + 2],
+    ];
+    let centre = corners.iter().sum::<Vec3>() / 4.0;
+    let normal = (corners[0] - corners[1])
+        .cross(corners[2] - corners[1])
+        .normalize();
+    let scene = Scene {
+        name: "coincident".into(),
+        mesh,
+        camera: hmdist::scene::Camera {
+            eye: centre - 3.0 * normal,
+            target: centre,
+            up: Vec3::Y,
+            fov_y_deg: 10.0,
+        },
+        light: None,
+        display_scale: 1.0,
+    };
+    // Gather rays from the face's own primary hits, many of them grazing (where the
+    // duplicate's t falls within its error bound): every one must escape.
+    let accel = Accel::build(&scene.mesh, BuildQuality::High);
+    let gbuffer = hmdist::render::primary_hits(&accel, &scene, 48, 48);
+    let mut cast = 0;
+    for hit in gbuffer.points.iter().flatten() {
+        let frame = hmdist::sampling::Frame::from_normal(hit.normal);
+        let origin = hit.spawn_origin(hit.normal);
+        for i in 0..64 {
+            for j in 0..14 {
+                let cos_theta = 1e-4 * (1 << j) as f32;
+                let phi = std::f32::consts::TAU * (i as f32 + 0.5) / 64.0;
+                let sin_theta = (1.0 - cos_theta * cos_theta).sqrt();
+                let local = Vec3::new(sin_theta * phi.cos(), sin_theta * phi.sin(), cos_theta);
+                let d = accel.hit_distance(
+                    origin,
+                    frame.to_world(local).normalize(),
+                    f32::INFINITY,
+                    Some(hit.triangle),
+                );
+                assert!(
+                    d.is_infinite(),
+                    "a ray leaving the face hit its duplicate at t = {d}"
+                );
+                cast += 1;
+            }
+        }
+    }
+    assert!(cast > 1_000_000, "{cast} rays");
+}

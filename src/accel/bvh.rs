@@ -1,36 +1,35 @@
-//! [`Accel`]: a compressed wide BVH (obvhs `CwBvh`, Ylitie et al. 2017) over the scene's
-//! triangles, traversed with our watertight triangle test.
+//! [`Accel`]: the scene's triangles in an 8-wide BVH ([`super::wide`]), traversed by the
+//! fastest SIMD kernel the CPU has ([`super::kernel`]) with our watertight triangle test.
 //!
-//! Choices, measured on the `cube` and `hall` rooms (see `cargo bench`):
-//! - obvhs's build preset decides trace speed far more than build time does: the
-//!   [`BuildQuality::High`] preset (`very_slow_build`, whole-tree reinsertion) traces several
-//!   times faster than `medium_build` for a build of about a second.
-//! - Triangles are copied into BVH leaf order, so a leaf's triangles are adjacent in memory.
-//! - obvhs's own triangle tests are not used: `Triangle::intersect` (Möller–Trumbore) is not
-//!   watertight, and obvhs 0.4's `RtTriangle::intersect_embree` returns `t` scaled by the
-//!   determinant, which picks the wrong closest hit.
-//! - obvhs's node test is not used either: it culls boxes that end before `t = 1e-4` (a fixed
-//!   epsilon, in scene units) and its slab test can round a box that a ray grazes into a miss.
-//!   [`NodeRay::child_hits`] widens each slab by the error bound of its own arithmetic, so
-//!   the test is conservative and scale-free: together with the watertight triangle test, no
-//!   ray slips through a closed mesh.
+//! Choices, measured on the `cube` and `hall` rooms and a 5 M-triangle sphere (see
+//! `cargo bench --bench gather` and `benches/embree/compare.sh`):
+//! - Our own wide BVH and kernels instead of obvhs's compressed wide BVH: its quantised nodes
+//!   cost about 250 instructions per node test on a CPU; a float node's eight slab tests are
+//!   about 25 AVX2 instructions, and a leaf block's eight triangle tests about 90.
+//! - obvhs still builds the binary BVH that is collapsed, and its preset decides trace speed
+//!   far more than build time does: [`BuildQuality::High`] (spatial splits, whole-tree
+//!   reinsertion) traces markedly faster than [`BuildQuality::Fast`], for a longer build.
+//! - The node test is pbrt-v4's conservative one: slab distances `(b − o)·(1/d)` carry at most
+//!   three roundings, so the far distance is scaled by `1 + 2γ(3)`; with the watertight
+//!   triangle test, no ray slips through a closed mesh.
 
-use std::time::Duration;
+use std::mem::MaybeUninit;
 
-use glam::{UVec2, Vec3, Vec3A, Vec4};
-use obvhs::cwbvh::{builder::build_cwbvh_from_tris, node::CwBvhNode, CwBvh};
-use obvhs::{triangle::Triangle, BvhBuildParams};
+use glam::{DVec3, Vec3, Vec3A};
+use obvhs::BvhBuildParams;
 
-use super::float_error::gamma;
-use super::triangle::{barycentric_point_error, WatertightRay};
+use super::kernel::{Kernel, RayData};
+use super::traverse::{closest, stack_size, Closest, Counter, Entry, TraversalStats};
+use super::triangle::barycentric_point_error;
+use super::wide::{WideBvh, WIDTH};
 use super::{Hit, RayCaster};
 use crate::scene::Mesh;
 
 /// BVH build presets: build time against trace speed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum BuildQuality {
-    /// obvhs `fast_build`: builds in a fraction of the time, traces markedly slower. For tiny
-    /// images or ray counts, where the build dominates.
+    /// obvhs `fast_build` (PLOC, light reinsertion): builds in a fraction of the time, traces
+    /// markedly slower. For tiny images or ray counts, where the build dominates.
     Fast,
     /// obvhs `very_slow_build`: spatial splits and whole-tree reinsertion. The default: HMD
     /// images cast millions of rays per build.
@@ -40,201 +39,182 @@ pub enum BuildQuality {
 
 impl BuildQuality {
     fn params(self) -> BvhBuildParams {
-        match self {
+        let params = match self {
             BuildQuality::Fast => BvhBuildParams::fast_build(),
             BuildQuality::High => BvhBuildParams::very_slow_build(),
+        };
+        // A leaf block of up to eight triangles costs one kernel call however full it is, so
+        // leaves are made fuller than obvhs's default (3.0): 70 instead of 93 bytes per
+        // triangle on `cube`, and about 5 % faster.
+        BvhBuildParams {
+            collapse_traversal_cost: 5.0,
+            ..params
         }
     }
 }
+
+/// Stack entries kept on the thread's stack; deeper trees (pathological inputs) use the heap.
+const INLINE_STACK: usize = 256;
 
 /// The scene's triangles in a BVH, ready for closest-hit queries from many threads.
 pub struct Accel {
-    bvh: CwBvh,
-    /// Triangle corners in BVH leaf order (`bvh.primitive_indices` order).
-    corners: Vec<[Vec3A; 3]>,
-    /// For each entry of `corners`, the triangle's index in the mesh.
-    mesh_index: Vec<u32>,
+    bvh: WideBvh,
+    kernel: Kernel,
+    /// For each mesh triangle, one block lane that holds it (`8·block + lane`).
+    location: Vec<u32>,
 }
 
 impl Accel {
+    /// Builds the BVH; the kernel is [`Kernel::from_env`], or the best one if that fails.
     pub fn build(mesh: &Mesh, quality: BuildQuality) -> Accel {
-        let triangles: Vec<Triangle> = (0..mesh.triangle_count())
-            .map(|i| {
-                let [v0, v1, v2] = mesh.triangle(i).map(Vec3A::from);
-                Triangle { v0, v1, v2 }
-            })
-            .collect();
-        let bvh = build_cwbvh_from_tris(&triangles, quality.params(), &mut Duration::default());
-        let corners = bvh
-            .primitive_indices
-            .iter()
-            .map(|&i| {
-                let t = &triangles[i as usize];
-                [t.v0, t.v1, t.v2]
-            })
-            .collect();
-        let mesh_index = bvh.primitive_indices.clone();
+        let bvh = WideBvh::build(mesh, quality.params());
+        let mut location = vec![0u32; mesh.triangle_count()];
+        for (block, lanes) in bvh.block_triangles.iter().enumerate() {
+            for (lane, &triangle) in lanes.iter().enumerate() {
+                location[triangle as usize] = (block * WIDTH + lane) as u32;
+            }
+        }
         Accel {
             bvh,
-            corners,
-            mesh_index,
+            kernel: Kernel::from_env().unwrap_or_else(|_| Kernel::best()),
+            location,
         }
     }
 
-    /// Closest hit as (leaf-order primitive, t, barycentrics).
-    #[inline(always)]
-    fn trace(
+    /// The same BVH traversed by `kernel`, which this CPU must be able to run.
+    pub fn with_kernel(mut self, kernel: Kernel) -> Accel {
+        assert!(
+            kernel.available(),
+            "this CPU cannot run the {} kernel",
+            kernel.name()
+        );
+        self.kernel = kernel;
+        self
+    }
+
+    pub fn kernel(&self) -> Kernel {
+        self.kernel
+    }
+
+    /// Wide nodes, leaf blocks, and the bytes they take.
+    pub fn size(&self) -> (usize, usize, usize) {
+        (self.bvh.nodes.len(), self.bvh.blocks.len(), self.bvh.bytes())
+    }
+
+    /// [`RayCaster::hit_distance`], counting the nodes and leaf blocks it visits.
+    pub fn hit_distance_counted(
         &self,
         origin: Vec3,
         direction: Vec3,
         t_max: f32,
         leaving: Option<u32>,
-    ) -> Option<(usize, f32, [f32; 3])> {
-        let ray = WatertightRay::new(origin, direction);
-        let node_ray = NodeRay::new(origin, direction);
-        let mut t_max = t_max;
-        let mut best: Option<(usize, f32, [f32; 3])> = None;
-        // The nearest hit within its own t error bound on another triangle: taken only if
-        // the ray would otherwise escape (see `RayCaster`).
-        let mut within_error: Option<(usize, f32, [f32; 3])> = None;
-        let mut state = self.bvh.new_traversal(direction.into());
-        let mut node;
-        obvhs::traverse!(
-            self.bvh,
-            node,
-            state,
-            node_ray.child_hits(node, t_max, state.oct_inv4),
-            {
-                let id = state.primitive_id as usize;
-                let [p0, p1, p2] = self.corners[id];
-                match ray.intersect(p0, p1, p2, t_max) {
-                    Some(hit) if !hit.within_error => {
-                        t_max = hit.t;
-                        best = Some((id, hit.t, hit.b));
-                    }
-                    Some(hit)
-                        if leaving != Some(self.mesh_index[id])
-                            && within_error.is_none_or(|(_, t, _)| hit.t < t) =>
-                    {
-                        within_error = Some((id, hit.t, hit.b));
-                    }
-                    _ => {}
-                }
-            }
-        );
-        best.or(within_error)
+        stats: &mut TraversalStats,
+    ) -> f32 {
+        self.trace(origin, direction, t_max, leaving, stats)
+            .map_or(f32::INFINITY, |c| c.t)
     }
-}
 
-/// A ray prepared for conservative slab tests against a node's quantised child boxes.
-#[derive(Clone, Copy)]
-struct NodeRay {
-    origin: Vec3A,
-    /// `1/d` per axis; a zero component is replaced by a tiny one of the same sign, so
-    /// parallel slabs give ±huge instead of NaN.
-    inv_direction: Vec3A,
-}
-
-impl NodeRay {
-    #[inline(always)]
-    fn new(origin: Vec3, direction: Vec3) -> Self {
-        let safe = |d: f32| if d == 0.0 { 1e-30f32.copysign(d) } else { d };
-        NodeRay {
-            origin: origin.into(),
-            inv_direction: Vec3A::new(
-                1.0 / safe(direction.x),
-                1.0 / safe(direction.y),
-                1.0 / safe(direction.z),
-            ),
+    /// The closest hit, with the kernel chosen at build.
+    #[inline]
+    fn trace<C: Counter>(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        t_max: f32,
+        leaving: Option<u32>,
+        counter: &mut C,
+    ) -> Option<Closest> {
+        if !(origin.is_finite() && direction.is_finite()) {
+            // A NaN would pass every box test (`maxps`/`minps` drop it) and reach empty slots.
+            return None;
+        }
+        let ray = RayData::new(origin, direction);
+        let accept = |block: u32, lane: usize| self.may_take_within_error_hit(leaving, block, lane);
+        let needed = stack_size(self.bvh.depth);
+        let mut inline = [MaybeUninit::<Entry>::uninit(); INLINE_STACK];
+        let mut heap = Vec::new();
+        let stack = if needed <= INLINE_STACK {
+            &mut inline[..]
+        } else {
+            heap.resize(needed, MaybeUninit::uninit());
+            &mut heap[..]
+        };
+        match self.kernel {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `with_kernel` and `Kernel::from_env` only choose kernels the CPU has.
+            Kernel::Avx2 => unsafe {
+                super::kernel::avx2::closest_avx2(&self.bvh, &ray, t_max, &accept, stack, counter)
+            },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: as above.
+            Kernel::Avx512 => unsafe {
+                super::kernel::avx2::closest_avx512(&self.bvh, &ray, t_max, &accept, stack, counter)
+            },
+            _ => closest::<super::kernel::scalar::Scalar, C>(&self.bvh, &ray, t_max, &accept, stack, counter),
         }
     }
 
-    /// The traversal hit mask of `node`'s children whose boxes the ray meets in `[0, t_max]`.
-    ///
-    /// A child box is `p + q·e` with 8-bit `q` and power-of-two `e`, so slab distances are
-    /// `q·(e/d) + (p − o)/d`. Each is computed with a few roundings; the slab is widened by
-    /// the bound `γ(5)·(255·|e/d| + |(p − o)/d|)` on their error, per axis, so no box the ray
-    /// truly meets is rejected (at the price of a few extra box hits).
-    #[inline(always)]
-    fn child_hits(&self, node: &CwBvhNode, t_max: f32, oct_inv4: u32) -> u32 {
-        let scale = node.compute_extent() * self.inv_direction;
-        let offset = (Vec3A::from(node.p) - self.origin) * self.inv_direction;
-        let slop = gamma(5) * (255.0 * scale.abs() + offset.abs());
-        let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
-        let mut hit_mask = 0;
-        let axes = [
-            (dequantize(&node.child_min_x), dequantize(&node.child_max_x)),
-            (dequantize(&node.child_min_y), dequantize(&node.child_max_y)),
-            (dequantize(&node.child_min_z), dequantize(&node.child_max_z)),
-        ];
-        for half in 0..2 {
-            let slab = |axis: usize| {
-                let (lo, hi) = axes[axis];
-                let t0 = lo[half] * scale[axis] + Vec4::splat(offset[axis]);
-                let t1 = hi[half] * scale[axis] + Vec4::splat(offset[axis]);
-                (
-                    t0.min(t1) - Vec4::splat(slop[axis]),
-                    t0.max(t1) + Vec4::splat(slop[axis]),
-                )
-            };
-            let (near_x, far_x) = slab(0);
-            let (near_y, far_y) = slab(1);
-            let (near_z, far_z) = slab(2);
-            let near = near_x.max(near_y).max(near_z).max(Vec4::ZERO);
-            let far = far_x.min(far_y).min(far_z).min(Vec4::splat(t_max));
-            let mask = near.cmple(far).bitmask();
-            for j in 0..4 {
-                // Branch-free: box hits are unpredictable.
-                let keep = ((mask >> j) & 1).wrapping_neg();
-                let child = 4 * half + j as usize;
-                let bits = ((child_bits8 >> (8 * child)) & 0xFF) as u32;
-                let index = ((bit_index8 >> (8 * child)) & 0xFF) as u32;
-                hit_mask |= (bits << index) & keep;
-            }
+    /// The rule for hits within their own `t` error bound (see [`super`]): a ray that would
+    /// otherwise escape takes one, unless it lies on the surface the ray leaves: the triangle
+    /// itself, or any triangle in its plane (coincident duplicate faces are common in real
+    /// scenes, and a ray that left a plane cannot enter it again).
+    fn may_take_within_error_hit(&self, leaving: Option<u32>, block: u32, lane: usize) -> bool {
+        let Some(leaving) = leaving else { return true };
+        if self.bvh.block_triangles[block as usize][lane] == leaving {
+            return false;
         }
-        hit_mask
+        let candidate = self.bvh.blocks[block as usize].triangle(lane);
+        let location = self.location[leaving as usize] as usize;
+        let left = self.bvh.blocks[location / WIDTH].triangle(location % WIDTH);
+        !coplanar(left, candidate)
+    }
+
+    fn hit_from(&self, closest: Closest, ray: &RayData) -> Hit {
+        let corners = self.bvh.blocks[closest.block as usize].triangle(closest.lane);
+        let [p0, p1, p2] = corners;
+        let b = ray
+            .triangle
+            .intersect(p0, p1, p2, f32::INFINITY)
+            .map_or([1.0 / 3.0; 3], |hit| hit.b);
+        let p = corners.map(Vec3::from);
+        Hit {
+            t: closest.t,
+            triangle: self.bvh.block_triangles[closest.block as usize][closest.lane],
+            point: b[0] * p[0] + b[1] * p[1] + b[2] * p[2],
+            point_error: barycentric_point_error(b, p),
+            normal: (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero(),
+        }
     }
 }
 
-/// Eight quantised box bounds as two `Vec4`s of floats.
-#[inline(always)]
-fn dequantize(q: &[u8; 8]) -> [Vec4; 2] {
-    #[cfg(target_arch = "x86_64")]
-    {
-        // SAFETY: SSE2 is part of the x86_64 baseline; the load reads exactly the 8 bytes of `q`.
-        unsafe {
-            use std::arch::x86_64::*;
-            let bytes = _mm_loadl_epi64(q.as_ptr() as *const __m128i);
-            let words = _mm_unpacklo_epi8(bytes, _mm_setzero_si128());
-            let lo = _mm_unpacklo_epi16(words, _mm_setzero_si128());
-            let hi = _mm_unpackhi_epi16(words, _mm_setzero_si128());
-            [Vec4::from(_mm_cvtepi32_ps(lo)), Vec4::from(_mm_cvtepi32_ps(hi))]
-        }
+/// Whether all corners of `other` lie in the plane of `triangle`, to within the rounding of
+/// their f32 coordinates (evaluated in f64).
+fn coplanar(triangle: [Vec3A; 3], other: [Vec3A; 3]) -> bool {
+    let [a, b, c] = triangle.map(|v| DVec3::from(Vec3::from(v)));
+    let normal = (b - a).cross(c - a);
+    let length = normal.length();
+    if length == 0.0 {
+        return false;
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        let f = |i: usize| Vec4::new(q[i] as f32, q[i + 1] as f32, q[i + 2] as f32, q[i + 3] as f32);
-        [f(0), f(4)]
-    }
+    let scale = [a, b, c]
+        .iter()
+        .chain(other.map(|v| DVec3::from(Vec3::from(v))).iter())
+        .fold(0.0f64, |m, v| m.max(v.abs().max_element()));
+    let tolerance = 8.0 * f32::EPSILON as f64 * scale;
+    other
+        .iter()
+        .all(|v| (normal.dot(DVec3::from(Vec3::from(*v)) - a) / length).abs() <= tolerance)
 }
 
 impl RayCaster for Accel {
     fn closest_hit(&self, origin: Vec3, direction: Vec3, t_max: f32, leaving: Option<u32>) -> Option<Hit> {
-        let (id, t, b) = self.trace(origin, direction, t_max, leaving)?;
-        let p = self.corners[id].map(Vec3::from);
-        let point = b[0] * p[0] + b[1] * p[1] + b[2] * p[2];
-        Some(Hit {
-            t,
-            triangle: self.mesh_index[id],
-            point,
-            point_error: barycentric_point_error(b, p),
-            normal: (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero(),
-        })
+        let closest = self.trace(origin, direction, t_max, leaving, &mut ())?;
+        Some(self.hit_from(closest, &RayData::new(origin, direction)))
     }
 
     #[inline]
     fn hit_distance(&self, origin: Vec3, direction: Vec3, t_max: f32, leaving: Option<u32>) -> f32 {
-        self.trace(origin, direction, t_max, leaving)
-            .map_or(f32::INFINITY, |(_, t, _)| t)
+        self.trace(origin, direction, t_max, leaving, &mut ())
+            .map_or(f32::INFINITY, |c| c.t)
     }
 }

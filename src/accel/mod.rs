@@ -2,30 +2,39 @@
 //!
 //! Guarantees every estimator relies on:
 //! - **Watertight**: a ray cannot slip between two triangles that share an edge
-//!   ([`triangle`]), and BVH boxes are tested conservatively ([`bvh`]). In a closed room no
+//!   ([`triangle`]), and BVH boxes are tested conservatively ([`kernel`]). In a closed room no
 //!   ray escapes.
 //! - **Robust origins**: a ray leaving a surface starts at [`offset_ray_origin`] of the hit,
 //!   and hits closer than their own `t` error bound (whose sign cannot be trusted) are
 //!   rejected, so a ray never re-hits the surface it leaves and never sees a neighbouring
 //!   facet at a spurious tiny distance; near-horizon hits in concave places are kept.
 //!   One exception keeps closed meshes closed: a ray that would otherwise escape takes the
-//!   nearest such hit on a triangle other than the one it leaves. (A point a few ulps from a
-//!   second wall, in a room's corner, really does see that wall; rejecting the hit let rays
-//!   leak out of `cube`. Accepting all such hits instead darkened 0.7 % of `cube`'s pixels,
-//!   near facet edges, with spurious tiny distances.)
+//!   nearest such hit, unless it lies in the plane of the triangle the ray leaves. (A point a
+//!   few ulps from a second wall, in a room's corner, really does see that wall; rejecting
+//!   the hit let rays leak out of `cube`. Accepting all such hits instead darkened 0.7 % of
+//!   `cube`'s pixels, near facet edges, with spurious tiny distances; and a face's coincident
+//!   duplicate, common in real files, is in the plane the ray leaves and so never hit.)
+//! - **The same bits on every CPU path**: the kernels (scalar, AVX2, AVX-512) return the same
+//!   hit distances bit for bit, and so the same images; `HMDIST_KERNEL` forces one.
 //!
 //! The interface is [`RayCaster`]: no per-ray allocation and no dynamic dispatch; estimators
-//! are generic over it. [`Accel`] is the implementation (obvhs's compressed wide BVH).
+//! are generic over it. [`Accel`] is the implementation: an 8-wide BVH ([`wide`]) traversed
+//! nearest child first ([`traverse`]) by SIMD kernels chosen at run time ([`kernel`]).
 //! Distances are in scene units; directions must be unit length for `t` to be a distance.
 
 pub mod bvh;
 pub mod float_error;
+pub mod kernel;
+pub mod traverse;
 pub mod triangle;
+pub mod wide;
 
 use glam::Vec3;
 
 pub use bvh::{Accel, BuildQuality};
 pub use float_error::offset_ray_origin;
+pub use kernel::Kernel;
+pub use traverse::TraversalStats;
 
 /// A ray's first hit, with what a secondary ray needs to leave the surface robustly.
 #[derive(Clone, Copy, Debug)]

@@ -19,13 +19,13 @@ use super::float_error::gamma;
 /// ray direction onto +z.
 #[derive(Clone, Copy, Debug)]
 pub struct WatertightRay {
-    origin: Vec3A,
-    kx: usize,
-    ky: usize,
-    kz: usize,
-    sx: f32,
-    sy: f32,
-    sz: f32,
+    pub(crate) origin: Vec3A,
+    pub(crate) kx: usize,
+    pub(crate) ky: usize,
+    pub(crate) kz: usize,
+    pub(crate) sx: f32,
+    pub(crate) sy: f32,
+    pub(crate) sz: f32,
 }
 
 /// Where a ray hits a triangle: distance and barycentric weights of the three corners.

@@ -45,6 +45,23 @@ impl Gather {
         hemisphere(self.weighting, u)
     }
 
+    /// The gather rays of pixel `pixel` from its surface point: the origin (offset off the
+    /// surface) and the world-space directions, exactly the rays [`Gather::pixel`] casts.
+    #[inline]
+    pub fn rays(
+        &self,
+        hit: &Hit,
+        seed: u64,
+        pixel: u64,
+    ) -> (glam::Vec3, impl Iterator<Item = glam::Vec3> + '_) {
+        let origin = hit.spawn_origin(hit.normal);
+        let frame = Frame::from_normal(hit.normal);
+        let grid = strata(self.rays);
+        let directions =
+            (0..self.rays).map(move |j| frame.to_world(self.local_direction(grid, seed, pixel, j)));
+        (origin, directions)
+    }
+
     /// H at one surface point, and how many of its rays escaped.
     pub fn pixel<R: RayCaster>(
         &self,
@@ -53,13 +70,10 @@ impl Gather {
         hit: &Hit,
         pixel: u64,
     ) -> (f32, u32) {
-        let origin = hit.spawn_origin(hit.normal);
-        let frame = Frame::from_normal(hit.normal);
-        let grid = strata(self.rays);
+        let (origin, directions) = self.rays(hit, context.seed, pixel);
         let mut mean = HarmonicMean::default();
         let mut escaped = 0;
-        for j in 0..self.rays {
-            let dir = frame.to_world(self.local_direction(grid, context.seed, pixel, j));
+        for dir in directions {
             let d = accel.hit_distance(origin, dir, context.clamp.max, Some(hit.triangle));
             escaped += d.is_infinite() as u32;
             mean.add(d, context.clamp);

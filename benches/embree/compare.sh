@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# hmdist against Embree on the same rays: Embree 3 from C (Debian's libembree-dev, robust and
+# fast variants) and Embree 4 through Open3D (open3d-cpu from PyPI). Sets the peers up itself
+# (run as root on Debian/Ubuntu, or with the packages already installed).
+#
+#   benches/embree/compare.sh [CASES] [RUNS]
+#
+# CASES: space-separated SCENE:SIDE:N (default "cube:256:256 cube:64:4096 hall:256:256");
+# SCENE is a built-in or a file hmdist reads, SIDE² pixels × N cosine gather rays of
+# `hmdist render`. Each case writes the rays once (origins, the triangle they leave,
+# directions), exports hmdist's exact triangles as OBJ, then runs every caster RUNS times
+# (default 5), interleaved, on all cores, and prints medians: build seconds, trace Mrays/s,
+# escaped rays, and hmdist's throughput as a ratio to each peer's. Only the BVH build and the
+# casting loop are timed, for every caster. Timings drift ±10 %: compare within one run.
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+root="$(cd "$here/../.." && pwd)"
+cases="${1:-cube:256:256 cube:64:4096 hall:256:256}"
+runs="${2:-5}"
+threads="$(nproc)"
+work="${HMDIST_COMPARE_DIR:-$(mktemp -d)}"
+mkdir -p "$work"
+
+# The peers.
+if [ ! -f /usr/include/embree3/rtcore.h ] || ! ldconfig -p | grep -q libusb-1.0; then
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -qq
+    apt-get install -y -qq libembree-dev libusb-1.0-0 gcc >/dev/null
+fi
+gcc -O3 -march=native -o "$work/embree_cast" "$here/embree_cast.c" -lembree3 -lpthread -lm
+venv="${HMDIST_COMPARE_VENV:-$work/venv}"
+if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c 'import open3d' 2>/dev/null; then
+    python3 -m venv "$venv"
+    "$venv/bin/pip" install -q open3d-cpu numpy
+fi
+(cd "$root" && cargo build --release -q --example gather_rays --bin hmdist)
+hmdist="$root/target/release/hmdist"
+gather_rays="$root/target/release/examples/gather_rays"
+
+for case in $cases; do
+    IFS=: read -r scene side n <<<"$case"
+    rays="$work/$scene-$side-$n.hmdr"
+    obj="$work/$scene.obj"
+    [ -f "$rays" ] || "$gather_rays" write "$scene" "$side" "$n" "$rays"
+    [ -f "$obj" ] || "$hmdist" scene export "$scene" "$obj" >/dev/null
+    log="$work/$scene-$side-$n.log"
+    : >"$log"
+    for _ in $(seq "$runs"); do
+        "$gather_rays" cast "$scene" "$rays" >>"$log"
+        "$work/embree_cast" "$obj" "$rays" "$threads" robust >>"$log"
+        "$work/embree_cast" "$obj" "$rays" "$threads" fast >>"$log"
+        "$venv/bin/python" "$here/open3d_cast.py" "$obj" "$rays" "$threads" >>"$log"
+    done
+    python3 - "$log" "$case" "$threads" <<'PY'
+import statistics, sys
+log, case, threads = sys.argv[1], sys.argv[2], sys.argv[3]
+runs = {}
+for line in open(log):
+    words = line.split()
+    fields = dict(zip(words[1::2], words[2::2]))
+    runs.setdefault(words[0], []).append(fields)
+med = lambda name, key: statistics.median(float(r[key]) for r in runs[name])
+ours = med("hmdist", "mrays_per_s")
+print(f"\n{case} ({threads} threads, medians of {len(runs['hmdist'])} interleaved runs)")
+print(f"{'caster':<14} {'build_s':>8} {'Mrays/s':>8} {'escaped':>8} {'hmdist ÷':>9}")
+for name in runs:
+    m = med(name, "mrays_per_s")
+    escaped = int(runs[name][0]["escaped"])
+    ratio = ours / m
+    print(f"{name:<14} {med(name, 'build_s'):>8.2f} {m:>8.2f} {escaped:>8} {ratio:>9.2f}")
+PY
+done

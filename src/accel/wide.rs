@@ -1,0 +1,264 @@
+//! The 8-wide BVH that the kernels traverse: float (uncompressed) child boxes stored
+//! structure-of-arrays, one node per 256 bytes, leaves of up to 8 triangles stored
+//! structure-of-arrays so one 8-lane instruction tests them all.
+//!
+//! Built by collapsing a binary BVH from obvhs (PLOC, optional spatial splits, reinsertion:
+//! Meister & Bittner 2018, Meister et al. 2021): each wide node takes the two children of a
+//! binary node and repeatedly opens its largest-area inner child until it has eight (Wald et
+//! al. 2008; Embree's BVH8 and tinybvh's `BVH8_CPU` are built the same way). Nodes and leaf
+//! blocks are laid out in depth-first order, so a subtree's nodes are near each other.
+//!
+//! Boxes are computed here, bottom-up, from the triangles themselves, not taken from obvhs:
+//! with spatial splits obvhs clips a triangle's box at a split plane with rounded arithmetic,
+//! and a box a few ulps too small could let a ray through. A leaf's box is the union of its
+//! triangles' boxes, each cut to the (slightly widened) split box; without splits that is
+//! exactly the triangles' box.
+
+use std::time::Duration;
+
+use glam::Vec3A;
+use obvhs::aabb::Aabb;
+use obvhs::bvh2::{builder::build_bvh2_from_tris, Bvh2};
+use obvhs::triangle::Triangle;
+use obvhs::BvhBuildParams;
+
+use crate::scene::Mesh;
+
+/// Children per node and triangles per leaf block.
+pub const WIDTH: usize = 8;
+
+/// A child slot that holds nothing: its box is empty (`lo = +inf`, `hi = −inf`), which every
+/// kernel's slab test rejects.
+pub const EMPTY: u32 = u32::MAX;
+/// Set in a child reference that names a leaf block rather than a node.
+pub const LEAF: u32 = 1 << 31;
+
+/// One wide node: the boxes of its eight children per axis (`bounds[0..3]` the minima in x,
+/// y, z, `bounds[3..6]` the maxima), and what each child is: a node index, `LEAF | block`, or
+/// [`EMPTY`].
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub struct Node {
+    pub bounds: [[f32; WIDTH]; 6],
+    pub child: [u32; WIDTH],
+}
+
+/// Up to eight triangles, `corner[k][axis][lane]`. A block with fewer triangles repeats its
+/// last one in the spare lanes: a repeated triangle gives the same hit, and ties go to the
+/// lowest lane, so no lane mask is needed.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+pub struct Block {
+    pub corner: [[[f32; WIDTH]; 3]; 3],
+}
+
+impl Block {
+    /// The three corners of the triangle in `lane`.
+    #[inline]
+    pub fn triangle(&self, lane: usize) -> [Vec3A; 3] {
+        self.corner
+            .map(|c| Vec3A::new(c[0][lane], c[1][lane], c[2][lane]))
+    }
+}
+
+/// The wide BVH: nodes (the root is node 0), leaf blocks, and each block lane's triangle index
+/// in the mesh.
+pub struct WideBvh {
+    pub nodes: Vec<Node>,
+    pub blocks: Vec<Block>,
+    pub block_triangles: Vec<[u32; WIDTH]>,
+    /// Longest path from the root to a leaf, in nodes: bounds the traversal stack.
+    pub depth: usize,
+}
+
+impl WideBvh {
+    /// Builds the binary BVH with `params` (leaves of at most [`WIDTH`] triangles) and
+    /// collapses it.
+    pub fn build(mesh: &Mesh, params: BvhBuildParams) -> WideBvh {
+        let triangles: Vec<Triangle> = (0..mesh.triangle_count())
+            .map(|i| {
+                let [v0, v1, v2] = mesh.triangle(i).map(Vec3A::from);
+                Triangle { v0, v1, v2 }
+            })
+            .collect();
+        let params = BvhBuildParams {
+            max_prims_per_leaf: params.max_prims_per_leaf.min(WIDTH as u32),
+            ..params
+        };
+        let mut wide = WideBvh {
+            nodes: Vec::new(),
+            blocks: Vec::new(),
+            block_triangles: Vec::new(),
+            depth: 1,
+        };
+        if triangles.is_empty() {
+            wide.nodes.push(empty_node());
+            return wide;
+        }
+        let bvh2 = build_bvh2_from_tris(&triangles, params, &mut Duration::default());
+        let collapse = Collapse {
+            bvh2: &bvh2,
+            triangles: &triangles,
+        };
+        let root = &bvh2.nodes[0];
+        if root.prim_count > 0 {
+            // A single leaf: one node whose only child is that leaf.
+            let mut node = empty_node();
+            let (reference, bounds) = collapse.leaf(0, &mut wide);
+            set_child(&mut node, 0, reference, bounds);
+            wide.nodes.push(node);
+        } else {
+            collapse.node(0, &mut wide, 1);
+        }
+        wide
+    }
+
+    /// Bytes held by the nodes and leaf blocks (what the kernels read).
+    pub fn bytes(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<Node>()
+            + self.blocks.len() * (std::mem::size_of::<Block>() + std::mem::size_of::<[u32; WIDTH]>())
+    }
+}
+
+fn empty_node() -> Node {
+    let mut bounds = [[f32::INFINITY; WIDTH]; 6];
+    bounds[3..].fill([f32::NEG_INFINITY; WIDTH]);
+    Node {
+        bounds,
+        child: [EMPTY; WIDTH],
+    }
+}
+
+fn set_child(node: &mut Node, slot: usize, reference: u32, bounds: Aabb) {
+    for axis in 0..3 {
+        node.bounds[axis][slot] = bounds.min[axis];
+        node.bounds[3 + axis][slot] = bounds.max[axis];
+    }
+    node.child[slot] = reference;
+}
+
+struct Collapse<'a> {
+    bvh2: &'a Bvh2,
+    triangles: &'a [Triangle],
+}
+
+impl Collapse<'_> {
+    /// Emits the wide node for binary inner node `index` (depth-first: the node first, then
+    /// its subtrees) and returns its index and box.
+    fn node(&self, index: usize, wide: &mut WideBvh, depth: usize) -> (u32, Aabb) {
+        wide.depth = wide.depth.max(depth);
+        let first = self.bvh2.nodes[index].first_index as usize;
+        let mut children = vec![first, first + 1];
+        // Open the inner child of largest area until there are eight children.
+        while children.len() < WIDTH {
+            let widest = children
+                .iter()
+                .enumerate()
+                .filter(|(_, &c)| self.bvh2.nodes[c].prim_count == 0)
+                .max_by(|(_, &a), (_, &b)| {
+                    let area = |c: usize| self.bvh2.nodes[c].aabb().half_area();
+                    area(a).total_cmp(&area(b))
+                })
+                .map(|(slot, _)| slot);
+            let Some(slot) = widest else { break };
+            let opened = self.bvh2.nodes[children[slot]].first_index as usize;
+            children[slot] = opened;
+            children.insert(slot + 1, opened + 1);
+        }
+        let position = wide.nodes.len();
+        wide.nodes.push(empty_node());
+        let mut node = empty_node();
+        let mut bounds = Aabb::INVALID;
+        for (slot, &child) in children.iter().enumerate() {
+            let (reference, child_bounds) = if self.bvh2.nodes[child].prim_count > 0 {
+                self.leaf(child, wide)
+            } else {
+                self.node(child, wide, depth + 1)
+            };
+            set_child(&mut node, slot, reference, child_bounds);
+            bounds = bounds.union(&child_bounds);
+        }
+        wide.nodes[position] = node;
+        (position as u32, bounds)
+    }
+
+    /// Emits the leaf block for binary leaf `index` and returns its reference and box.
+    fn leaf(&self, index: usize, wide: &mut WideBvh) -> (u32, Aabb) {
+        let leaf = &self.bvh2.nodes[index];
+        let first = leaf.first_index as usize;
+        let primitives = &self.bvh2.primitive_indices[first..first + leaf.prim_count as usize];
+        let split_box = widened(*leaf.aabb());
+        let mut block = Block {
+            corner: [[[0.0; WIDTH]; 3]; 3],
+        };
+        let mut lanes = [0u32; WIDTH];
+        let mut bounds = Aabb::INVALID;
+        for lane in 0..WIDTH {
+            let triangle = primitives[lane.min(primitives.len() - 1)];
+            let t = &self.triangles[triangle as usize];
+            for (k, v) in [t.v0, t.v1, t.v2].iter().enumerate() {
+                for axis in 0..3 {
+                    block.corner[k][axis][lane] = v[axis];
+                }
+            }
+            lanes[lane] = triangle;
+            let tight = Aabb::from_points(&[t.v0, t.v1, t.v2]);
+            bounds = bounds.union(&tight.intersection(&split_box));
+        }
+        wide.blocks.push(block);
+        wide.block_triangles.push(lanes);
+        (LEAF | (wide.blocks.len() - 1) as u32, bounds)
+    }
+}
+
+/// `bounds` grown by a few ulps of its coordinates: obvhs's split boxes are computed with
+/// rounding, and cutting a triangle's box to one must never cut off part of the triangle.
+fn widened(bounds: Aabb) -> Aabb {
+    let slack = (bounds.min.abs().max(bounds.max.abs())) * (8.0 * f32::EPSILON) + f32::MIN_POSITIVE;
+    Aabb::new(bounds.min - slack, bounds.max + slack)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::procedural::shapes::icosphere;
+
+    #[test]
+    fn every_triangle_is_in_a_leaf_inside_every_box_above_it() {
+        let mesh = icosphere(3, glam::Vec3::new(0.3, -0.2, 0.1), 2.0);
+        for params in [BvhBuildParams::fast_build(), BvhBuildParams::very_slow_build()] {
+            let wide = WideBvh::build(&mesh, params);
+            let mut seen = vec![false; mesh.triangle_count()];
+            // Walk the tree, checking each child's box contains what is below it.
+            let mut stack = vec![(0u32, Aabb::LARGEST)];
+            while let Some((index, outer)) = stack.pop() {
+                let node = &wide.nodes[index as usize];
+                for slot in 0..WIDTH {
+                    let reference = node.child[slot];
+                    if reference == EMPTY {
+                        continue;
+                    }
+                    let min = Vec3A::new(node.bounds[0][slot], node.bounds[1][slot], node.bounds[2][slot]);
+                    let max = Vec3A::new(node.bounds[3][slot], node.bounds[4][slot], node.bounds[5][slot]);
+                    assert!(outer.min.cmple(min).all() && max.cmple(outer.max).all());
+                    let inner = Aabb::new(min, max);
+                    if reference & LEAF != 0 {
+                        let block = (reference & !LEAF) as usize;
+                        for lane in 0..WIDTH {
+                            seen[wide.block_triangles[block][lane] as usize] = true;
+                            let [a, b, c] = wide.blocks[block].triangle(lane);
+                            if !params.pre_split {
+                                for v in [a, b, c] {
+                                    assert!(inner.contains_point(v));
+                                }
+                            }
+                        }
+                    } else {
+                        stack.push((reference, inner));
+                    }
+                }
+            }
+            assert!(seen.iter().all(|&s| s), "a triangle is in no leaf");
+        }
+    }
+}
