@@ -108,8 +108,13 @@ fn render_in_pool(
     progress: &dyn Progress,
 ) -> Result<Rendered> {
     let kernel = Kernel::from_env()?;
+    let pixels = options.width as u64 * options.height as u64;
+    let bvh = options.bvh_quality.resolve(
+        pixels + estimator.expected_rays(pixels),
+        scene.mesh.triangle_count(),
+    );
     let start = Instant::now();
-    let accel = Accel::build(&scene.mesh, options.bvh_quality).with_kernel(kernel);
+    let accel = Accel::build(&scene.mesh, bvh).with_kernel(kernel);
     let accel_build = start.elapsed().as_secs_f64();
 
     let primary_start = Instant::now();
@@ -147,6 +152,7 @@ fn render_in_pool(
         "seed": options.seed,
         "threads": rayon::current_num_threads(),
         "kernel": kernel.name(),
+        "bvh": bvh.name(),
         "max_distance": options.max_distance,
         "triangles": scene.mesh.triangle_count(),
         "l_diag": l_diag,

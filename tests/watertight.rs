@@ -63,6 +63,15 @@ fn in_the_closed_cube_scene_no_gather_ray_escapes() {
 }
 
 #[test]
+fn in_cube_at_1024_squared_and_64_rays_no_gather_ray_escapes() {
+    // The render a new user runs first: 67 M gather rays, every one must stay in the room.
+    let scene = Scene::load("cube").unwrap();
+    let (_, report) = common::gather(&scene, 1024, 1024, 64, Weighting::Cosine, None);
+    assert_eq!(report["rays_cast"], 1024 * 1024 * 64);
+    assert_eq!(report["escaped_rays"], 0);
+}
+
+#[test]
 fn same_image_for_1_and_2_threads() {
     let scene = Scene::load("cube").unwrap();
     let (one, _) = common::gather(&scene, 40, 32, 64, Weighting::Cosine, Some(1));

@@ -5,17 +5,19 @@
 #
 #   benches/embree/compare.sh [CASES] [RUNS]
 #
-# CASES: space-separated SCENE:SIDE:N (default "cube:256:256 cube:64:4096 hall:256:256");
-# SCENE is a built-in or a file hmdist reads, SIDE² pixels × N cosine gather rays of
-# `hmdist render`. Each case writes the rays once (origins, the triangle they leave,
+# CASES: space-separated SCENE:SIDE:N (default "cube:256:256 cube:64:4096 hall:256:256
+# sphere5m:256:64"); SCENE is a built-in, a file hmdist reads, or sphere5m (a closed
+# icosphere of 5,242,880 triangles seen from inside, written as OBJ + TOML); SIDE² pixels ×
+# N cosine gather rays of `hmdist render`. Each case writes the rays once (origins, the triangle they leave,
 # directions), exports hmdist's exact triangles as OBJ, then runs every caster RUNS times
 # (default 5), interleaved, on all cores, and prints medians: build seconds, trace Mrays/s,
-# escaped rays, and hmdist's throughput as a ratio to each peer's. Only the BVH build and the
+# escaped rays, hmdist's throughput as a ratio to each peer's, and build + trace seconds
+# with the peer's total as a ratio to hmdist's (above 1: hmdist finishes first). Only the BVH build and the
 # casting loop are timed, for every caster. Timings drift ±10 %: compare within one run.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
-cases="${1:-cube:256:256 cube:64:4096 hall:256:256}"
+cases="${1:-cube:256:256 cube:64:4096 hall:256:256 sphere5m:256:64}"
 runs="${2:-5}"
 threads="$(nproc)"
 work="${HMDIST_COMPARE_DIR:-$(mktemp -d)}"
@@ -39,11 +41,18 @@ gather_rays="$root/target/release/examples/gather_rays"
 
 for case in $cases; do
     IFS=: read -r scene side n <<<"$case"
-    rays="$work/$scene-$side-$n.hmdr"
-    obj="$work/$scene.obj"
+    name="$(basename "$scene")"
+    rays="$work/$name-$side-$n.hmdr"
+    obj="$work/$name.obj"
+    if [ "$scene" = sphere5m ]; then
+        mkdir -p "$work/sphere5m"
+        [ -f "$work/sphere5m/sphere.toml" ] || "$gather_rays" sphere 9 "$work/sphere5m"
+        obj="$work/sphere5m/sphere.obj"
+        scene="$work/sphere5m/sphere.toml"
+    fi
     [ -f "$rays" ] || "$gather_rays" write "$scene" "$side" "$n" "$rays"
     [ -f "$obj" ] || "$hmdist" scene export "$scene" "$obj" >/dev/null
-    log="$work/$scene-$side-$n.log"
+    log="$work/$name-$side-$n.log"
     : >"$log"
     for _ in $(seq "$runs"); do
         "$gather_rays" cast "$scene" "$rays" >>"$log"
@@ -62,11 +71,12 @@ for line in open(log):
 med = lambda name, key: statistics.median(float(r[key]) for r in runs[name])
 ours = med("hmdist", "mrays_per_s")
 print(f"\n{case} ({threads} threads, medians of {len(runs['hmdist'])} interleaved runs)")
-print(f"{'caster':<14} {'build_s':>8} {'Mrays/s':>8} {'escaped':>8} {'hmdist ÷':>9}")
+total = lambda name: statistics.median(float(r["build_s"]) + float(r["trace_s"]) for r in runs[name])
+print(f"{'caster':<14} {'build_s':>8} {'Mrays/s':>8} {'escaped':>8} {'hmdist ÷':>9} {'build+trace_s':>14} {'hmdist ÷':>9}")
 for name in runs:
     m = med(name, "mrays_per_s")
     escaped = int(runs[name][0]["escaped"])
-    ratio = ours / m
-    print(f"{name:<14} {med(name, 'build_s'):>8.2f} {m:>8.2f} {escaped:>8} {ratio:>9.2f}")
+    print(f"{name:<14} {med(name, 'build_s'):>8.2f} {m:>8.2f} {escaped:>8} {ours / m:>9.2f} "
+          f"{total(name):>14.2f} {total(name) / total('hmdist'):>9.2f}")
 PY
 done

@@ -3,7 +3,9 @@
 //!
 //! ```text
 //! gather_rays write SCENE SIDE N FILE   # SIDE² pixels × N cosine gather rays of `render`
-//! gather_rays cast SCENE FILE [fast|high]  # build, then cast them all: seconds, Mrays/s
+//! gather_rays cast SCENE FILE [auto|fast|high]  # build, then cast them all: seconds, Mrays/s
+//! gather_rays sphere LEVEL DIR          # DIR/sphere.obj (icosphere, 20·4^LEVEL triangles,
+//!                                       # R = 2.5) and DIR/sphere.toml, a camera inside it
 //! ```
 //!
 //! FILE: `HMDR`, then little-endian u32 version (1), pixels, rays per pixel; per surface
@@ -28,11 +30,14 @@ fn main() {
         ["write", scene, side, rays, file] => {
             write(scene, side.parse().unwrap(), rays.parse().unwrap(), file)
         }
-        ["cast", scene, file] => cast(scene, file, BuildQuality::High),
+        ["cast", scene, file] | ["cast", scene, file, "auto"] => cast(scene, file, BuildQuality::Auto),
         ["cast", scene, file, "fast"] => cast(scene, file, BuildQuality::Fast),
         ["cast", scene, file, "high"] => cast(scene, file, BuildQuality::High),
+        ["sphere", level, dir] => sphere(level.parse().unwrap(), std::path::Path::new(dir)),
         _ => {
-            eprintln!("usage: gather_rays write SCENE SIDE N FILE | gather_rays cast SCENE FILE [fast|high]");
+            eprintln!(
+                "usage: gather_rays write SCENE SIDE N FILE | cast SCENE FILE [auto|fast|high] | sphere LEVEL DIR"
+            );
             std::process::exit(2);
         }
     }
@@ -71,6 +76,13 @@ fn write(name: &str, side: u32, rays: u32, file: &str) {
     out.flush().unwrap();
 }
 
+fn sphere(level: u32, dir: &std::path::Path) {
+    let mesh = hmdist::scene::procedural::shapes::icosphere(level, Vec3::ZERO, 2.5);
+    hmdist::scene::export::write_obj(&mesh, &dir.join("sphere.obj")).expect("a writable folder");
+    let toml = "[[mesh]]\npath = \"sphere.obj\"\n[camera]\neye = [0.4, 0.3, 1.2]\ntarget = [0.0, -0.2, -2.0]\nfov_y_deg = 70.0\n";
+    std::fs::write(dir.join("sphere.toml"), toml).expect("a writable folder");
+}
+
 struct Pixel {
     origin: Vec3,
     triangle: u32,
@@ -102,6 +114,8 @@ fn read(file: &str) -> Vec<Pixel> {
 fn cast(name: &str, file: &str, quality: BuildQuality) {
     let scene = Scene::load(name).expect("a scene");
     let pixels = read(file);
+    let rays: usize = pixels.iter().map(|p| p.directions.len()).sum();
+    let quality = quality.resolve(rays as u64, scene.mesh.triangle_count());
     let start = Instant::now();
     let accel = Accel::build(&scene.mesh, quality);
     let build = start.elapsed().as_secs_f64();
@@ -120,11 +134,11 @@ fn cast(name: &str, file: &str, quality: BuildQuality) {
         })
         .reduce(|| (0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
     let seconds = start.elapsed().as_secs_f64();
-    let rays: usize = pixels.iter().map(|p| p.directions.len()).sum();
     println!(
-        "hmdist build_s {build:.3} trace_s {seconds:.3} mrays_per_s {:.3} rays {rays} escaped {escaped} mean_inverse {:.6} kernel {}",
+        "hmdist build_s {build:.3} trace_s {seconds:.3} mrays_per_s {:.3} rays {rays} escaped {escaped} mean_inverse {:.6} kernel {} bvh {}",
         rays as f64 / seconds / 1e6,
         inverse_sum / rays as f64,
-        accel.kernel().name()
+        accel.kernel().name(),
+        quality.name()
     );
 }

@@ -52,7 +52,8 @@ def main():
     seconds = time.perf_counter() - start
     t = np.concatenate([t.numpy() for t in t_hits])
     escaped = int(np.isinf(t).sum())
-    mean_inverse = float(np.where(np.isinf(t), 0.0, 1.0 / t.astype(np.float64)).mean())
+    with np.errstate(divide="ignore"):  # a hit at t = 0 (self-intersection) counts as inf
+        mean_inverse = float(np.where(np.isinf(t), 0.0, 1.0 / t.astype(np.float64)).mean())
     print(
         f"open3d build_s {build:.3f} trace_s {seconds:.3f} mrays_per_s {len(rays) / seconds / 1e6:.3f} "
         f"rays {len(rays)} escaped {escaped} mean_inverse {mean_inverse:.6f}"

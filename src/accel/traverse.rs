@@ -6,6 +6,11 @@
 //! them has been found since. Everything outside the two kernel calls is shared by all
 //! kernels, so all of them visit the same nodes in the same order and return the same hit.
 //!
+//! Measured on `cube` (256 gather rays, AVX2, one thread) and not kept: several rays taking
+//! turns node by node, so that one computes while another waits for memory (17 % slower: it
+//! defeats the branch predictor); prefetching pushed children (no change); special paths for
+//! one and two hit children before the sort (no change).
+//!
 //! Hits within their own `t` error bound (see [`super::triangle`]) are kept aside and taken
 //! only if the ray finds nothing else, and only where `accept_within_error` allows (see
 //! [`super::Accel`]).

@@ -97,6 +97,10 @@ impl Estimator for Gather {
         super::fields(value)
     }
 
+    fn expected_rays(&self, pixels: u64) -> u64 {
+        pixels * self.rays as u64
+    }
+
     fn estimate(
         &self,
         context: &EstimateContext,

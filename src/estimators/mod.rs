@@ -74,6 +74,10 @@ pub trait Estimator: Sync {
     /// The method's parameters, for the JSON sidecar.
     fn parameters(&self) -> serde_json::Map<String, serde_json::Value>;
 
+    /// About how many rays the estimator will cast for an image of `pixels` surface pixels
+    /// (primary rays not included): chooses the BVH preset ([`crate::accel::BuildQuality`]).
+    fn expected_rays(&self, pixels: u64) -> u64;
+
     fn estimate(
         &self,
         context: &EstimateContext,

@@ -70,6 +70,15 @@ impl Estimator for Cubemap {
         p
     }
 
+    fn expected_rays(&self, pixels: u64) -> u64 {
+        // The CPU backend casts at most one ray per gather direction (one per texel looked
+        // up); the GPU backend rasterises instead.
+        match self.backend {
+            Backend::Gpu => 0,
+            _ => self.gather.expected_rays(pixels),
+        }
+    }
+
     fn estimate(
         &self,
         context: &EstimateContext,

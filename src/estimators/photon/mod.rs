@@ -160,6 +160,11 @@ impl Estimator for PhotonEstimator {
         self.method.name()
     }
 
+    fn expected_rays(&self, _pixels: u64) -> u64 {
+        // About one ray per stored photon, plus the paths' first rays.
+        self.params.photons as u64
+    }
+
     fn parameters(&self) -> serde_json::Map<String, serde_json::Value> {
         let p = &self.params;
         let value = json!({
