@@ -4,8 +4,9 @@ benches/embree/compare.sh.
     python open3d_cast.py SCENE.obj RAYS.hmdr THREADS
 
 Times the build (add_triangles plus the first query, which commits the scene) and the
-casting calls only; rays go in chunks of about 1 M. Prints one line in the format of
-gather_rays.rs."""
+casting calls only; rays go in chunks of about 1 M. Open3D has no tnear: hits at t = 0 (the
+surface a ray leaves, found again) count as hits, at 1/t = inf in `mean_inverse`. Prints one
+line in the format of gather_rays.rs."""
 import sys
 import time
 

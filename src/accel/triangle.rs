@@ -174,5 +174,18 @@ mod tests {
         assert!(ray
             .intersect(a, b, c, f32::INFINITY)
             .is_none_or(|hit| hit.within_error));
+        // The same point seen from a little way off the surface is a trustworthy hit, at the
+        // distance travelled (so the test above cannot pass by never hitting anything).
+        let normal = Vec3::from((b - a).cross(c - a)).normalize();
+        for d in [1e-2f32, 1e-3] {
+            let hit = WatertightRay::new(Vec3::from(p) + d * normal, -normal)
+                .intersect(a, b, c, f32::INFINITY)
+                .expect("a hit from just off the surface");
+            assert!(
+                !hit.within_error && (hit.t - d).abs() < 1e-5,
+                "t = {} for {d}",
+                hit.t
+            );
+        }
     }
 }
