@@ -47,12 +47,13 @@ fn main() {
                     .install(|| gather.estimate(&context, &gbuffer, &Silent))
                     .unwrap();
                 let seconds = start.elapsed().as_secs_f64();
+                let rays = estimate.rays.expect("gather counts its rays");
                 println!(
                     "{name:<6} {:>9}  {:<6} {build:>7.2}  {threads:>7}  {:>7.2}  {:>7}",
                     scene.mesh.triangle_count(),
                     format!("{quality:?}").to_lowercase(),
-                    estimate.rays_cast as f64 / seconds / 1e6,
-                    estimate.escaped_rays,
+                    rays.cast as f64 / seconds / 1e6,
+                    rays.escaped,
                 );
             }
         }

@@ -163,6 +163,7 @@ fn gpu_backend_gives_exact_distances_and_agrees_with_cpu_on_cube() {
     };
     println!("adapter: {}", exact.report["adapter"]);
     assert_eq!(exact.report["backend"], "gpu");
+    assert_eq!(exact.report["escaped_lookups"], 0, "the box is closed");
     let (gathered, _) = common::gather(&box_scene, 1, 1, 4096, Weighting::Cosine, None);
     let error = relative_difference(&exact.image, &gathered);
     println!(

@@ -244,7 +244,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
             options.height,
             estimator.method(),
             r["seconds"]["total"].as_f64().unwrap_or(f64::NAN),
-            r["escaped_rays"],
+            // The cube map's rays fill texels; its directions are the lookups.
+            r.get("escaped_lookups").unwrap_or(&r["escaped_rays"]),
             r["background_pixels"],
             args.out.display(),
             png.display(),

@@ -82,30 +82,44 @@ impl Drop for Scratch {
 pub const REQUIRE_GPU: &str = "HMDIST_REQUIRE_GPU";
 
 /// The result of a render on the cube map's GPU backend, or `None` where this machine has no
-/// Vulkan, Metal or DX12 adapter: then the skip and its reason go to stderr, written to it
-/// directly (libtest would hide `eprintln!` of a passing test).
-/// Where `HMDIST_REQUIRE_GPU` or `CI` is set, a missing adapter fails the test instead.
+/// Vulkan, Metal or DX12 adapter (see [`gpu_missing`]).
 pub fn gpu_or_skip(test: &str, result: Result<Rendered>) -> Option<Rendered> {
-    let required = std::env::var_os(REQUIRE_GPU).is_some() || std::env::var_os("CI").is_some();
     match result {
         Ok(rendered) => Some(rendered),
-        Err(e) if !required && e.to_string().contains("no Vulkan") => {
-            let _ = writeln!(
-                std::io::stderr(),
-                "SKIPPED {test}: {e}. Install a Vulkan driver (Debian: mesa-vulkan-drivers \
-                 libvulkan1); set {REQUIRE_GPU}=1 to make this a failure."
-            );
-            None
-        }
+        Err(e) if gpu_missing(test, &e.to_string()) => None,
         Err(e) => panic!("{test}: the GPU backend must run here: {e}"),
     }
 }
 
+/// Whether `error` says that this machine has no Vulkan, Metal or DX12 adapter and the test
+/// may skip: then the skip and its reason go to stderr, written to it directly (libtest would
+/// hide `eprintln!` of a passing test). Where `HMDIST_REQUIRE_GPU` or `CI` is set, a missing
+/// adapter fails the test instead.
+pub fn gpu_missing(test: &str, error: &str) -> bool {
+    let required = std::env::var_os(REQUIRE_GPU).is_some() || std::env::var_os("CI").is_some();
+    if !error.contains("no Vulkan") {
+        return false;
+    }
+    assert!(
+        !required,
+        "{test}: the GPU backend must run here ({REQUIRE_GPU} or CI is set): {error}"
+    );
+    let _ = writeln!(
+        std::io::stderr(),
+        "SKIPPED {test}: {}. Install a Vulkan driver (Debian: mesa-vulkan-drivers libvulkan1); \
+         set {REQUIRE_GPU}=1 to make this a failure.",
+        error.trim()
+    );
+    true
+}
+
 /// A square floor at y = 0, `2·half_width` wide, seen straight down from `eye_height` by a
-/// 1-pixel-wide camera at the origin: nothing above it, so every ray from it escapes.
+/// camera over the origin: nothing above it, so every ray from it escapes. Its centre, and
+/// the edge its two triangles share, are off the origin, where a 1 × 1 image looks.
 pub fn floor(half_width: f32, eye_height: f32) -> Scene {
     let mut mesh = Mesh::new();
-    add_square(&mut mesh, Vec3::ZERO, Vec3::X * half_width, Vec3::Z * half_width);
+    let centre = Vec3::new(0.3, 0.0, 0.1);
+    add_square(&mut mesh, centre, Vec3::X * half_width, Vec3::Z * half_width);
     Scene {
         name: "floor".into(),
         mesh,

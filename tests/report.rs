@@ -1,0 +1,204 @@
+//! The JSON sidecar of every method and backend (SPEC §7) says what was counted, with the
+//! values it must have, and `null` for what a method does not measure.
+//!
+//! The scene: a 4 × 4.2 floor and nothing else, seen straight down from height 3 with a 90°
+//! field of view, and a spot light above it whose cone lands on the floor. Every ray from the
+//! floor escapes. On an 8 × 8 image pixel column px looks at x = 3·((px + ½)/4 − 1), which
+//! lies on the floor (|x| ≤ 2) for px = 1 … 6, and so for rows: 6 × 6 = 36 surface pixels,
+//! 28 background. (The floor is not square so that no pixel lands on the edge its two
+//! triangles share: see the note in the report on issue #9.)
+
+mod common;
+
+use common::cli::{hmdist, hmdist_ok, read_json};
+use common::{gpu_missing, Scratch};
+use serde_json::{json, Value};
+
+const SURFACE_PIXELS: u64 = 36;
+const RAYS: u64 = 16;
+const PHOTONS: u64 = 500;
+
+const FLOOR_OBJ: &str = "v -2 0 -2.2\nv 2 0 -2.2\nv 2 0 2\nv -2 0 2\nf 1 2 3\nf 1 3 4\n";
+const FLOOR_TOML: &str = r#"[[mesh]]
+path = "floor.obj"
+[camera]
+eye = [0, 3, 0]
+target = [0, 0, 0]
+up = [0, 0, 1]
+fov_y_deg = 90.0
+[light]
+position = [0, 1, 0]
+direction = [0, -1, 0]
+cone_half_angle_deg = 30.0
+"#;
+
+/// The floor scene in a fresh folder.
+fn floor_scene(test: &str) -> Scratch {
+    let dir = Scratch::new(test);
+    dir.write("floor.obj", FLOOR_OBJ);
+    dir.write("floor.toml", FLOOR_TOML);
+    dir
+}
+
+/// Renders the floor with `method_args` and returns the JSON sidecar, or `None` where the GPU
+/// backend was asked for and this machine has none (the skip is said on stderr).
+fn report(dir: &Scratch, test: &str, method_args: &[&str]) -> Option<Value> {
+    let rays = RAYS.to_string();
+    let photons = PHOTONS.to_string();
+    let mut args = vec![
+        "render",
+        "--quiet",
+        "--scene",
+        "floor.toml",
+        "--size",
+        "8x8",
+        "--rays",
+        &rays,
+        "--photons",
+        &photons,
+        "--gather",
+        "8",
+    ];
+    args.extend_from_slice(method_args);
+    let out = hmdist(dir.path(), &args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if !out.status.success() && gpu_missing(test, &stderr) {
+        return None;
+    }
+    assert!(out.status.success(), "{}: {stderr}", args.join(" "));
+    Some(read_json(&dir.join("hmd.json")))
+}
+
+/// Asserts that `report` has `key` and that it is `null` (indexing a missing key gives `null`
+/// too).
+fn assert_null(report: &Value, key: &str) {
+    assert_eq!(report.get(key), Some(&Value::Null), "{key}");
+}
+
+/// The keys every method writes, with the values this scene gives them.
+fn assert_common_keys(report: &Value, method: &str, phases: &[&str]) {
+    assert_eq!(report["method"], method);
+    assert_eq!(
+        (report["width"].as_u64(), report["height"].as_u64()),
+        (Some(8), Some(8))
+    );
+    assert_eq!(report["seed"], 1);
+    assert_eq!(report["triangles"], 2);
+    let l_diag = report["l_diag"].as_f64().unwrap();
+    assert!(
+        (l_diag - (4f64.powi(2) + 4.2f64.powi(2)).sqrt()).abs() < 1e-6,
+        "l_diag {l_diag}"
+    );
+    assert_eq!(report["background_pixels"], 64 - SURFACE_PIXELS);
+    for phase in ["load", "accel_build", "primary", "estimate", "total"]
+        .iter()
+        .chain(phases)
+    {
+        assert!(report["seconds"][phase].is_number(), "{method}: seconds.{phase}");
+    }
+}
+
+#[test]
+fn gather_counts_every_ray_and_every_escape() {
+    let dir = floor_scene("report-gather");
+    let r = report(&dir, "gather", &["--method", "gather"]).unwrap();
+    assert_common_keys(&r, "gather", &[]);
+    assert_eq!(r["rays"], RAYS);
+    assert_eq!(r["rays_cast"], RAYS * SURFACE_PIXELS);
+    assert_eq!(r["escaped_rays"], RAYS * SURFACE_PIXELS);
+    assert!(r["mrays_per_s"].as_f64().unwrap() > 0.0);
+}
+
+#[test]
+fn cubemap_on_the_cpu_counts_texel_rays_and_lookups() {
+    let dir = floor_scene("report-cubemap-cpu");
+    let r = report(
+        &dir,
+        "cubemap cpu",
+        &["--method", "cubemap", "--backend", "cpu", "--cube-res", "4"],
+    )
+    .unwrap();
+    assert_common_keys(&r, "cubemap", &["cubemap_build_and_lookup"]);
+    assert_eq!((&r["rays"], &r["backend"]), (&json!(RAYS), &json!("cpu")));
+    assert_null(&r, "adapter");
+    // One ray per texel looked up: at least one and at most N per pixel.
+    let cast = r["rays_cast"].as_u64().unwrap();
+    assert!((SURFACE_PIXELS..=RAYS * SURFACE_PIXELS).contains(&cast), "{cast}");
+    assert_eq!(r["texels_rasterised"], cast);
+    assert_eq!(r["escaped_rays"], cast);
+    assert!(r["mrays_per_s"].as_f64().unwrap() > 0.0);
+    assert_eq!(r["lookups"], RAYS * SURFACE_PIXELS);
+    assert_eq!(r["escaped_lookups"], RAYS * SURFACE_PIXELS);
+    assert_eq!(r["texels_per_hemicube"], 12 * 4 * 4);
+}
+
+#[test]
+fn cubemap_on_the_gpu_casts_no_rays_and_counts_what_it_rasterises_and_looks_up() {
+    let test = "cubemap_on_the_gpu_casts_no_rays_and_counts_what_it_rasterises_and_looks_up";
+    let dir = floor_scene("report-cubemap-gpu");
+    let Some(r) = report(
+        &dir,
+        test,
+        &["--method", "cubemap", "--backend", "gpu", "--cube-res", "4"],
+    ) else {
+        return;
+    };
+    assert_common_keys(&r, "cubemap", &["cubemap_build", "cubemap_lookup"]);
+    assert_eq!((&r["rays"], &r["backend"]), (&json!(RAYS), &json!("gpu")));
+    assert!(r["adapter"].is_string());
+    for key in ["rays_cast", "escaped_rays", "mrays_per_s"] {
+        assert_null(&r, key);
+    }
+    assert_eq!(r["texels_rasterised"], SURFACE_PIXELS * 12 * 4 * 4);
+    assert_eq!(r["lookups"], RAYS * SURFACE_PIXELS);
+    assert_eq!(r["escaped_lookups"], RAYS * SURFACE_PIXELS);
+}
+
+#[test]
+fn photon_methods_count_the_rays_of_their_paths_and_have_no_gather_rays() {
+    // The light's cone lands on the floor, so every emission ray hits it; a photon stored
+    // there leaves upwards and escapes, which ends its path: one photon per path at most.
+    let dir = floor_scene("report-photon");
+    for (method, bytes) in [("photon1", 24), ("photon2", 32)] {
+        let r = report(&dir, method, &["--method", method]).unwrap();
+        assert_common_keys(&r, method, &["photon_trace", "photon_index", "gather"]);
+        assert_null(&r, "rays");
+        assert_eq!(r["photons_stored"], PHOTONS);
+        assert_eq!(r["escaped_photons"], PHOTONS);
+        let paths = r["paths_traced"].as_u64().unwrap();
+        assert!(
+            paths > PHOTONS,
+            "some paths are absorbed at their first hit: {paths}"
+        );
+        assert_eq!(r["rays_cast"], paths + PHOTONS);
+        assert_eq!(r["escaped_rays"], PHOTONS);
+        assert!(r["mrays_per_s"].as_f64().unwrap() > 0.0);
+        assert_eq!(r["bytes_per_photon"], bytes);
+        assert_eq!(r["holes"], 0);
+    }
+}
+
+#[test]
+fn the_summary_line_names_the_escapes_of_each_method() {
+    let dir = floor_scene("report-summary");
+    let line = hmdist_ok(
+        dir.path(),
+        &[
+            "render",
+            "--scene",
+            "floor.toml",
+            "--size",
+            "8x8",
+            "--rays",
+            "16",
+            "--method",
+            "cubemap",
+            "--backend",
+            "cpu",
+        ],
+    );
+    assert!(
+        line.contains(&format!("{} escaped", RAYS * SURFACE_PIXELS)),
+        "{line}"
+    );
+}
