@@ -36,11 +36,23 @@ fn unreadable_and_unwritable_paths_exit_2() {
         &render_args(&["--scene", "scene.xyz"]),
         "scene.xyz",
     );
+    // Each output by the name the user gave it, not by an internal temporary file's.
+    for (option, path) in [
+        ("--out", "no/such/folder/hmd.exr"),
+        ("--png", "no/such/folder/hmd.png"),
+        ("--json", "no/such/folder/hmd.json"),
+    ] {
+        let message = refuses("unwritable", &[], &render_args(&[option, path]), path);
+        assert!(
+            message.contains(&format!("error: {path}: cannot write")),
+            "{message}"
+        );
+    }
     refuses(
-        "unwritable",
+        "same-output-twice",
         &[],
-        &render_args(&["--out", "no/such/folder/hmd.exr"]),
-        "hmd",
+        &render_args(&["--png", "hmd.exr"]),
+        "hmd.exr: is named for two outputs",
     );
     refuses(
         "export-unwritable",
@@ -217,6 +229,18 @@ fn render_writes_exr_png_and_json_with_the_spec_keys() {
     let out = hmdist(dir.path(), &render_args(&["--scene", "slab"]));
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert_eq!(outputs(dir.path(), &[]), ["hmd.exr", "hmd.json", "hmd.png"]);
+    let exr = exr::meta::MetaData::read_from_file(dir.join("hmd.exr"), false).unwrap();
+    let channels: Vec<(String, exr::meta::attribute::SampleType)> = exr.headers[0]
+        .channels
+        .list
+        .iter()
+        .map(|c| (c.name.to_string(), c.sample_type))
+        .collect();
+    assert_eq!(
+        channels,
+        [("Y".to_string(), exr::meta::attribute::SampleType::F32)],
+        "SPEC §7: one float32 channel named Y"
+    );
     let report = read_json(&dir.join("hmd.json"));
     for key in [
         "method",
