@@ -1,44 +1,16 @@
 //! The JSON sidecar of every method and backend (SPEC §7) says what was counted, with the
 //! values it must have, and `null` for what a method does not measure.
 //!
-//! The scene: a 4 × 4.2 floor and nothing else, seen straight down from height 3 with a 90°
-//! field of view, and a spot light above it whose cone lands on the floor. Every ray from the
-//! floor escapes. On an 8 × 8 image pixel column px looks at x = 3·((px + ½)/4 − 1), which
-//! lies on the floor (|x| ≤ 2) for px = 1 … 6, and so for rows: 6 × 6 = 36 surface pixels,
-//! 28 background. (The floor is not square so that no pixel lands on the edge its two
-//! triangles share: see the note in the report on issue #9.)
+//! The scene: [`floor_scene`], where every ray from the floor escapes.
 
 mod common;
 
-use common::cli::{hmdist, hmdist_ok, read_json};
+use common::cli::{floor_scene, hmdist, hmdist_ok, read_json, SURFACE_PIXELS};
 use common::{gpu_missing, Scratch};
 use serde_json::{json, Value};
 
-const SURFACE_PIXELS: u64 = 36;
 const RAYS: u64 = 16;
 const PHOTONS: u64 = 500;
-
-const FLOOR_OBJ: &str = "v -2 0 -2.2\nv 2 0 -2.2\nv 2 0 2\nv -2 0 2\nf 1 2 3\nf 1 3 4\n";
-const FLOOR_TOML: &str = r#"[[mesh]]
-path = "floor.obj"
-[camera]
-eye = [0, 3, 0]
-target = [0, 0, 0]
-up = [0, 0, 1]
-fov_y_deg = 90.0
-[light]
-position = [0, 1, 0]
-direction = [0, -1, 0]
-cone_half_angle_deg = 30.0
-"#;
-
-/// The floor scene in a fresh folder.
-fn floor_scene(test: &str) -> Scratch {
-    let dir = Scratch::new(test);
-    dir.write("floor.obj", FLOOR_OBJ);
-    dir.write("floor.toml", FLOOR_TOML);
-    dir
-}
 
 /// Renders the floor with `method_args` and returns the JSON sidecar, or `None` where the GPU
 /// backend was asked for and this machine has none (the skip is said on stderr).

@@ -77,3 +77,37 @@ pub fn render_args<'a>(extra: &[&'a str]) -> Vec<&'a str> {
 pub fn read_json(path: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
 }
+
+/// A 4 × 4.2 floor and nothing else (`floor.obj`, no camera), and `floor.toml` placing it: seen
+/// straight down from height 3 with a 90° field of view, a spot light above it whose cone lands
+/// on the floor, display scale 0.1. On an 8 × 8 image pixel column px looks at
+/// x = 3·((px + ½)/4 − 1), on the floor (|x| ≤ 2) for px = 1 … 6, and so for rows: 6 × 6 =
+/// [`SURFACE_PIXELS`], 28 background. (Not square, so that no pixel lands on the edge its two
+/// triangles share, where a gather ray can hit the other triangle at t ≈ 1e-7.)
+pub fn floor_scene(test: &str) -> Scratch {
+    let dir = Scratch::new(test);
+    dir.write("floor.obj", FLOOR_OBJ);
+    dir.write("floor.toml", FLOOR_TOML);
+    dir
+}
+
+/// Surface pixels of an 8 × 8 image of [`floor_scene`].
+pub const SURFACE_PIXELS: u64 = 36;
+/// `l_diag` of [`floor_scene`].
+pub const FLOOR_DIAGONAL: f64 = 5.8; // √(4² + 4.2²)
+
+const FLOOR_OBJ: &str = "v -2 0 -2.2\nv 2 0 -2.2\nv 2 0 2\nv -2 0 2\nf 1 2 3\nf 1 3 4\n";
+const FLOOR_TOML: &str = r#"[[mesh]]
+path = "floor.obj"
+[camera]
+eye = [0, 3, 0]
+target = [0, 0, 0]
+up = [0, 0, 1]
+fov_y_deg = 90.0
+[light]
+position = [0, 1, 0]
+direction = [0, -1, 0]
+cone_half_angle_deg = 30.0
+[display]
+scale = 0.1
+"#;
