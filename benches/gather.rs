@@ -96,8 +96,9 @@ fn throughput(accel: &Accel, scene: &Scene, gbuffer: &GBuffer, rays: u32) -> (f6
         let estimate = pool
             .install(|| gather.estimate(&context, gbuffer, &Silent))
             .unwrap();
-        figures[i] = estimate.rays_cast as f64 / start.elapsed().as_secs_f64() / 1e6;
-        escaped = estimate.escaped_rays;
+        let rays = estimate.rays.expect("gather counts its rays");
+        figures[i] = rays.cast as f64 / start.elapsed().as_secs_f64() / 1e6;
+        escaped = rays.escaped;
     }
     (figures[0], figures[1], escaped)
 }

@@ -171,9 +171,9 @@ fn render_in_pool(
         })),
         "display_scale": scene.display_scale,
         "background_pixels": gbuffer.background_pixels(),
-        "rays_cast": estimate.rays_cast,
-        "escaped_rays": estimate.escaped_rays,
-        "mrays_per_s": estimate.rays_cast as f64 / estimate_seconds.max(1e-9) / 1e6,
+        "rays_cast": estimate.rays.map(|r| r.cast),
+        "escaped_rays": estimate.rays.map(|r| r.escaped),
+        "mrays_per_s": estimate.rays.map(|r| r.cast as f64 / r.seconds.max(1e-9) / 1e6),
         "seconds": seconds,
     });
     let fields = report.as_object_mut().expect("report is an object");

@@ -1,70 +1,11 @@
 //! The `hmdist` command end to end: bad input exits 2 with a message and leaves no file;
 //! TOML scenes follow the camera convention of SPEC §2 exactly.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
+use common::cli::{hmdist, outputs, read_json, refuses, render_args};
+use common::Scratch;
 use glam::DVec3;
-
-/// A fresh, empty folder for one test.
-fn workdir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("hmdist-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn hmdist(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hmdist"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("hmdist runs")
-}
-
-/// Files in `dir` apart from the inputs the test wrote.
-fn outputs(dir: &Path, inputs: &[&str]) -> Vec<String> {
-    std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| !inputs.contains(&n.as_str()))
-        .collect()
-}
-
-/// Runs `render` with `args` in a folder holding `files`, and checks the refusal.
-fn refuses(case: &str, files: &[(&str, &[u8])], args: &[&str], message: &str) {
-    let dir = workdir(case);
-    for (name, bytes) in files {
-        std::fs::write(dir.join(name), bytes).unwrap();
-    }
-    let out = hmdist(&dir, args);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(
-        out.status.code(),
-        Some(2),
-        "{case}: exit status, stderr: {stderr}"
-    );
-    assert!(!stderr.contains("panicked"), "{case}: panicked: {stderr}");
-    assert!(
-        stderr.to_lowercase().contains(&message.to_lowercase()),
-        "{case}: message should mention '{message}', got: {stderr}"
-    );
-    let names: Vec<&str> = files.iter().map(|(n, _)| *n).collect();
-    assert!(
-        outputs(&dir, &names).is_empty(),
-        "{case}: left files behind: {:?}",
-        outputs(&dir, &names)
-    );
-}
-
-const TINY: [&str; 4] = ["--size", "8x8", "--rays", "4"];
-
-fn render_args<'a>(extra: &[&'a str]) -> Vec<&'a str> {
-    let mut args = vec!["render", "--quiet"];
-    args.extend_from_slice(&TINY);
-    args.extend_from_slice(extra);
-    args
-}
 
 #[test]
 fn bad_parameters_exit_2_with_a_message_and_no_output() {
@@ -95,11 +36,23 @@ fn unreadable_and_unwritable_paths_exit_2() {
         &render_args(&["--scene", "scene.xyz"]),
         "scene.xyz",
     );
+    // Each output by the name the user gave it, not by an internal temporary file's.
+    for (option, path) in [
+        ("--out", "no/such/folder/hmd.exr"),
+        ("--png", "no/such/folder/hmd.png"),
+        ("--json", "no/such/folder/hmd.json"),
+    ] {
+        let message = refuses("unwritable", &[], &render_args(&[option, path]), path);
+        assert!(
+            message.contains(&format!("error: {path}: cannot write")),
+            "{message}"
+        );
+    }
     refuses(
-        "unwritable",
+        "same-output-twice",
         &[],
-        &render_args(&["--out", "no/such/folder/hmd.exr"]),
-        "hmd",
+        &render_args(&["--png", "hmd.exr"]),
+        "hmd.exr: is named for two outputs",
     );
     refuses(
         "export-unwritable",
@@ -202,7 +155,7 @@ fn toml_scene_follows_the_spec_camera_convention_pixel_for_pixel() {
     // A huge tilted plane: a pixel sees it exactly when its SPEC §2 ray heads towards it, so
     // the boundary between hit and background pixels is a slanted line that moves if the
     // camera's orientation, handedness, aspect or pixel centres differ in the least.
-    let dir = workdir("camera");
+    let dir = Scratch::new("camera");
     let n = DVec3::new(0.3, 1.0, 0.2).normalize();
     let (a, b) = (
         n.cross(DVec3::Z).normalize(),
@@ -232,7 +185,7 @@ fn toml_scene_follows_the_spec_camera_convention_pixel_for_pixel() {
     std::fs::write(dir.join("scene.toml"), toml).unwrap();
     let size = (96, 64);
     let out = hmdist(
-        &dir,
+        dir.path(),
         &[
             "render",
             "--quiet",
@@ -272,14 +225,23 @@ fn toml_scene_follows_the_spec_camera_convention_pixel_for_pixel() {
 
 #[test]
 fn render_writes_exr_png_and_json_with_the_spec_keys() {
-    let dir = workdir("outputs");
-    let out = hmdist(&dir, &render_args(&["--scene", "slab"]));
+    let dir = Scratch::new("outputs");
+    let out = hmdist(dir.path(), &render_args(&["--scene", "slab"]));
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let mut files = outputs(&dir, &[]);
-    files.sort();
-    assert_eq!(files, ["hmd.exr", "hmd.json", "hmd.png"]);
-    let report: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("hmd.json")).unwrap()).unwrap();
+    assert_eq!(outputs(dir.path(), &[]), ["hmd.exr", "hmd.json", "hmd.png"]);
+    let exr = exr::meta::MetaData::read_from_file(dir.join("hmd.exr"), false).unwrap();
+    let channels: Vec<(String, exr::meta::attribute::SampleType)> = exr.headers[0]
+        .channels
+        .list
+        .iter()
+        .map(|c| (c.name.to_string(), c.sample_type))
+        .collect();
+    assert_eq!(
+        channels,
+        [("Y".to_string(), exr::meta::attribute::SampleType::F32)],
+        "SPEC §7: one float32 channel named Y"
+    );
+    let report = read_json(&dir.join("hmd.json"));
     for key in [
         "method",
         "width",
@@ -306,11 +268,11 @@ fn render_writes_exr_png_and_json_with_the_spec_keys() {
 
 #[test]
 fn same_exr_bytes_with_1_and_2_threads() {
-    let dir = workdir("threads");
+    let dir = Scratch::new("threads");
     for t in ["1", "2"] {
         let exr = format!("t{t}.exr");
         let out = hmdist(
-            &dir,
+            dir.path(),
             &[
                 "render",
                 "--quiet",
@@ -365,17 +327,17 @@ fn bad_photon_arguments_exit_2_with_a_message_and_no_output() {
 
 #[test]
 fn diff_of_an_image_with_itself_is_zero_and_mismatched_sizes_exit_2() {
-    let dir = workdir("diff");
+    let dir = Scratch::new("diff");
     for (out, size) in [("a.exr", "16x12"), ("b.exr", "8x8")] {
         let r = hmdist(
-            &dir,
+            dir.path(),
             &[
                 "render", "--quiet", "--scene", "cube", "--size", size, "--rays", "4", "--out", out,
             ],
         );
         assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     }
-    let same = hmdist(&dir, &["diff", "a.exr", "a.exr", "--png", "d.png"]);
+    let same = hmdist(dir.path(), &["diff", "a.exr", "a.exr", "--png", "d.png"]);
     let text = String::from_utf8_lossy(&same.stdout);
     assert!(
         same.status.success() && text.contains("f_diff:              0.000000"),
@@ -383,7 +345,7 @@ fn diff_of_an_image_with_itself_is_zero_and_mismatched_sizes_exit_2() {
     );
     assert!(text.contains("pixels compared:     192"), "{text}");
     assert!(dir.join("d.png").exists());
-    let mismatch = hmdist(&dir, &["diff", "a.exr", "b.exr"]);
+    let mismatch = hmdist(dir.path(), &["diff", "a.exr", "b.exr"]);
     assert_eq!(mismatch.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&mismatch.stderr).contains("differ in size"));
 }

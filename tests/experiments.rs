@@ -1,10 +1,17 @@
 //! The experiment runner (SPEC §4, §6): the paper's Table 1 shape, a report whose links all
-//! resolve, and reruns that reuse the cached images.
+//! resolve, and a cache that reuses an image exactly when nothing that determines it changed.
 
+mod common;
+
+use std::collections::BTreeMap;
 use std::path::Path;
+use std::time::SystemTime;
 
+use common::Scratch;
+use hmdist::estimators::Gather;
 use hmdist::experiments::{Preset, Runner};
 use hmdist::progress::Silent;
+use hmdist::sampling::Weighting;
 
 fn column(csv: &str, index: usize) -> Vec<f64> {
     csv.lines()
@@ -20,10 +27,36 @@ fn hrefs(html: &str) -> Vec<String> {
         .collect()
 }
 
+/// Each cached file and when it was last written: a render rewrites its files.
+fn cache_times(out: &Path) -> BTreeMap<String, SystemTime> {
+    std::fs::read_dir(out.join("cache"))
+        .unwrap()
+        .map(|e| {
+            let e = e.unwrap();
+            let name = e.file_name().to_string_lossy().into_owned();
+            (name, e.metadata().unwrap().modified().unwrap())
+        })
+        .collect()
+}
+
+/// Dates every cached file back to 2001, so that a file written again (even within the
+/// file system's timestamp resolution) shows a later time; returns [`cache_times`].
+fn backdate_cache(out: &Path) -> BTreeMap<String, SystemTime> {
+    let long_ago = SystemTime::UNIX_EPOCH + std::time::Duration::from_secs(1_000_000_000);
+    for e in std::fs::read_dir(out.join("cache")).unwrap() {
+        let file = std::fs::File::options()
+            .append(true)
+            .open(e.unwrap().path())
+            .unwrap();
+        file.set_modified(long_ago).unwrap();
+    }
+    cache_times(out)
+}
+
 #[test]
 fn quick_table1_on_cube_falls_with_rays_and_the_report_links_only_existing_files() {
-    let out = std::env::temp_dir().join(format!("hmdist-experiments-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&out);
+    let dir = Scratch::new("experiments-table1");
+    let out = dir.join("out");
     let mut runner = Runner::new("cube", Preset::Quick, &out, &Silent).unwrap();
     runner.run("table1").unwrap();
     let csv = std::fs::read_to_string(out.join("table1.csv")).unwrap();
@@ -51,13 +84,75 @@ fn quick_table1_on_cube_falls_with_rays_and_the_report_links_only_existing_files
         );
     }
 
-    // A rerun renders nothing new: the same cached images give the same table.
-    let cached = |dir: &Path| std::fs::read_dir(dir.join("cache")).unwrap().count();
-    let before = cached(&out);
+    // A rerun renders nothing: every cached file stays as it was written.
+    let before = backdate_cache(&out);
     let mut again = Runner::new("cube", Preset::Quick, &out, &Silent).unwrap();
     again.run("table1").unwrap();
-    assert_eq!(cached(&out), before);
+    assert_eq!(cache_times(&out), before);
     let csv_again = std::fs::read_to_string(out.join("table1.csv")).unwrap();
     assert_eq!(column(&csv_again, 1), gather);
-    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// A floor and a ceiling `height` above it, 20 wide, as OBJ text.
+fn slab_obj(height: f32) -> String {
+    let mut obj = String::new();
+    for y in [0.0, height] {
+        for (x, z) in [(-10.0, -10.0), (10.0, -10.0), (10.0, 10.0), (-10.0, 10.0)] {
+            obj += &format!("v {x} {y} {z}\n");
+        }
+    }
+    obj + "f 1 2 3\nf 1 3 4\nf 5 6 7\nf 5 7 8\n"
+}
+
+#[test]
+fn editing_a_mesh_that_a_toml_scene_references_renders_again_and_nothing_else_does() {
+    let dir = Scratch::new("experiments-cache");
+    let (out, toml) = (dir.join("out"), dir.join("scene.toml"));
+    std::fs::write(
+        &toml,
+        "[[mesh]]\npath = \"slab.obj\"\n[camera]\neye = [0, 0.4, 0]\ntarget = [0, 0, 0]\nup = [0, 0, 1]\nfov_y_deg = 40.0\n",
+    )
+    .unwrap();
+    let scene = toml.to_str().unwrap();
+    let gather = Gather::new(16, Weighting::Cosine).unwrap();
+    // The median H over the image; about 3h/2 on a slab of height h.
+    let median_h = |out: &Path| {
+        let runner = Runner::new(scene, Preset::Quick, out, &Silent).unwrap();
+        let (image, _) = runner.image(&gather, 5).unwrap();
+        common::median(image.data.iter().map(|&h| h as f64).collect())
+    };
+
+    dir.write("slab.obj", slab_obj(1.0));
+    let low = median_h(&out);
+    let written = backdate_cache(&out);
+    assert_eq!(written.len(), 2, "one EXR and its JSON: {written:?}");
+    assert_eq!(median_h(&out), low);
+    assert_eq!(
+        cache_times(&out),
+        written,
+        "an unchanged scene is not rendered again"
+    );
+
+    // Raise the ceiling: the TOML file itself is untouched.
+    dir.write("slab.obj", slab_obj(2.0));
+    let high = median_h(&out);
+    println!("median H: {low} at h = 1, {high} at h = 2");
+    assert!((high / low - 2.0).abs() < 0.05, "rendered again: {low} -> {high}");
+
+    // An image cached by another version of hmdist is not reused.
+    let json = cache_times(&out)
+        .into_keys()
+        .filter(|n| n.ends_with(".json") && !written.contains_key(n))
+        .map(|n| out.join("cache").join(n))
+        .next()
+        .unwrap();
+    let text = std::fs::read_to_string(&json).unwrap();
+    let version = format!("\"hmdist_version\": \"{}\"", env!("CARGO_PKG_VERSION"));
+    assert!(text.contains(&version), "{text}");
+    std::fs::write(&json, text.replace(&version, "\"hmdist_version\": \"0.0.0\"")).unwrap();
+    let before = backdate_cache(&out);
+    assert_eq!(median_h(&out), high);
+    let exr = json.with_extension("exr");
+    let name = exr.file_name().unwrap().to_string_lossy().into_owned();
+    assert_ne!(cache_times(&out)[&name], before[&name], "rendered again");
 }

@@ -3,44 +3,23 @@
 //! the line, where the format has lines). Test files are written at run time into a fresh
 //! directory under the system temp dir.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
+
+use common::Scratch;
 
 use glam::Vec3;
 use hmdist::scene::export::write_obj;
 use hmdist::scene::load::load_file;
 use hmdist::scene::{Mesh, Scene};
 
-/// A fresh, empty directory for one test, removed when the test ends.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(test: &str) -> Scratch {
-        let pid = std::process::id();
-        let dir = std::env::temp_dir().join(format!("hmdist-loaders-{pid}-{test}"));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-
-    fn write(&self, name: &str, contents: impl AsRef<[u8]>) -> PathBuf {
-        let path = self.0.join(name);
-        std::fs::write(&path, contents).unwrap();
-        path
-    }
-
-    /// Writes `contents` to the file named at the start of `expected` ("name.obj:4: what"),
-    /// loads it, and asserts that this fails with a message containing `expected`.
-    fn assert_fails(&self, contents: impl AsRef<[u8]>, expected: &str) {
-        let name = expected.split(':').next().unwrap();
-        let message = error_of(&self.write(name, contents));
-        assert!(message.contains(expected), "{message}");
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
+/// Writes `contents` to the file named at the start of `expected` ("name.obj:4: what") in
+/// `dir`, loads it, and asserts that this fails with a message containing `expected`.
+fn assert_fails(dir: &Scratch, contents: impl AsRef<[u8]>, expected: &str) {
+    let name = expected.split(':').next().unwrap();
+    let message = error_of(&dir.write(name, contents));
+    assert!(message.contains(expected), "{message}");
 }
 
 /// The corners of every triangle, in order: independent of how a loader numbers vertices.
@@ -93,7 +72,7 @@ fn obj_export_reads_back_exactly() {
     ]);
     mesh.add_triangle(0, 1, 2);
     mesh.add_triangle(2, 1, 3);
-    let path = dir.0.join("mesh.obj");
+    let path = dir.join("mesh.obj");
     write_obj(&mesh, &path).unwrap();
 
     let text = std::fs::read_to_string(&path).unwrap();
@@ -102,7 +81,7 @@ fn obj_export_reads_back_exactly() {
     assert_eq!(scene.mesh, mesh, "same vertices, same order, same triangles");
     assert_eq!(scene.name, "mesh.obj");
     assert_eq!(
-        std::fs::read_dir(&dir.0).unwrap().count(),
+        std::fs::read_dir(dir.path()).unwrap().count(),
         1,
         "no temporary file left"
     );
@@ -343,22 +322,22 @@ fn bad_obj_files_name_the_file_and_line() {
     let dir = Scratch::new("bad-obj");
     let tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
     let garbage = format!("{tri}hello world\nf 1 2 3\n");
-    dir.assert_fails(garbage, "garbage.obj:4: 'hello' is not an OBJ statement");
+    assert_fails(&dir, garbage, "garbage.obj:4: 'hello' is not an OBJ statement");
     let short = format!("{tri}f 1 2 3\nf 1 2\n");
-    dir.assert_fails(short, "short.obj:5: a face needs at least 3 corners");
+    assert_fails(&dir, short, "short.obj:5: a face needs at least 3 corners");
     let range = format!("{tri}f 1 2 3\n# c\nf 1 2 12\nv 5 5 5\n");
-    dir.assert_fails(range, "range.obj:6: face refers to vertex 12 but");
+    assert_fails(&dir, range, "range.obj:6: face refers to vertex 12 but");
     let zero = format!("{tri}f 0 1 2\n");
-    dir.assert_fails(zero, "zero.obj:4: vertex numbers start at 1, not 0");
+    assert_fails(&dir, zero, "zero.obj:4: vertex numbers start at 1, not 0");
     let nan = tri.replace("v 1 0 0", "v nan 0 0") + "f 1 2 3";
-    dir.assert_fails(nan, "nan.obj:2: vertex 2 is not finite: (NaN, 0");
+    assert_fails(&dir, nan, "nan.obj:2: vertex 2 is not finite: (NaN, 0");
     let word = format!("{tri}v 1 x 0\nf 1 2 3\n");
-    dir.assert_fails(word, "word.obj:4: cannot read the vertex coordinates");
+    assert_fails(&dir, word, "word.obj:4: cannot read the vertex coordinates");
     let letters = format!("{tri}f 1 2 three\n");
-    dir.assert_fails(letters, "letters.obj:4: cannot read the face's corners");
+    assert_fails(&dir, letters, "letters.obj:4: cannot read the face's corners");
     let elf = [0x7f, b'E', b'L', b'F', 0xff, 0xfe, b'\n'];
-    dir.assert_fails(elf, "elf.obj:1: the line is not UTF-8 text");
-    dir.assert_fails(tri, "points.obj: the scene has no triangles");
+    assert_fails(&dir, elf, "elf.obj:1: the line is not UTF-8 text");
+    assert_fails(&dir, tri, "points.obj: the scene has no triangles");
 }
 
 #[test]
@@ -367,46 +346,46 @@ fn bad_ply_files_name_the_file_and_line() {
     let binary = square_ply("binary_little_endian");
     let cut = |n: usize| &binary[..binary.len() - n];
     let eof = "Unexpected end of file while reading";
-    dir.assert_fails(cut(1), &format!("cut1.ply: {eof} binary element 'face'"));
-    dir.assert_fails(cut(60), &format!("cut2.ply: {eof} binary element 'vertex'"));
+    assert_fails(&dir, cut(1), &format!("cut1.ply: {eof} binary element 'face'"));
+    assert_fails(&dir, cut(60), &format!("cut2.ply: {eof} binary element 'vertex'"));
     let header = String::from_utf8_lossy(&binary).find("end_header").unwrap();
-    dir.assert_fails(&binary[..header], &format!("cut3.ply:11: {eof} header"));
+    assert_fails(&dir, &binary[..header], &format!("cut3.ply:11: {eof} header"));
     let extra = [binary.as_slice(), b"\0"].concat();
-    dir.assert_fails(extra, "extra.ply: 1 bytes after the last element");
+    assert_fails(&dir, extra, "extra.ply: 1 bytes after the last element");
 
     let ascii = String::from_utf8(square_ply("ascii")).unwrap();
     let short = ascii.replace("3 1 4 2\n", "");
-    dir.assert_fails(short, &format!("short.ply:18: {eof} element 'face'"));
+    assert_fails(&dir, short, &format!("short.ply:18: {eof} element 'face'"));
     let range = ascii.replace("3 1 4 2", "3 1 9 2");
-    dir.assert_fails(range, "range.ply:18: face 1 refers to vertex 9 but");
+    assert_fails(&dir, range, "range.ply:18: face 1 refers to vertex 9 but");
     let inf = ascii.replacen("1 1 0", "1 1e39 0", 1); // ascii PLY has no "nan"
-    dir.assert_fails(inf, "inf.ply:14: vertex 2 is not finite: (1, inf");
+    assert_fails(&dir, inf, "inf.ply:14: vertex 2 is not finite: (1, inf");
     let more = format!("{ascii}0 1 2\n");
-    dir.assert_fails(more, "more.ply:19: data after the last element");
+    assert_fails(&dir, more, "more.ply:19: data after the last element");
     let typo = "ply\nformat ascii 1.0\nelemnt vertex 3\n";
-    dir.assert_fails(typo, "typo.ply:3: Couldn't parse line");
+    assert_fails(&dir, typo, "typo.ply:3: Couldn't parse line");
     let cloud = ascii.replace("element face 2", "element face 0");
     let cloud = &cloud[..cloud.find("4 0 1 2 3").unwrap()];
-    dir.assert_fails(cloud, "cloud.ply: the scene has no triangles");
+    assert_fails(&dir, cloud, "cloud.ply: the scene has no triangles");
 }
 
 #[test]
 fn bad_gltf_files_name_the_file() {
     let dir = Scratch::new("bad-gltf");
     let garbage = "{\n  \"asset\": [ nonsense\n";
-    dir.assert_fails(garbage, "garbage.gltf:2: not valid glTF JSON");
-    dir.assert_fails("glTF\x02\0\0\0?", "garbage.glb: not a valid glTF file");
+    assert_fails(&dir, garbage, "garbage.gltf:2: not valid glTF JSON");
+    assert_fails(&dir, "glTF\x02\0\0\0?", "garbage.glb: not a valid glTF file");
     let gltf = triangle_gltf(Some(&triangle_data_uri()));
     // The gltf crate's own validation looks the accessor up with this index: a panic.
     let index = gltf.replace(r#""POSITION": 0"#, r#""POSITION": 7"#);
-    dir.assert_fails(index, "index.gltf: malformed file");
+    assert_fails(&dir, index, "index.gltf: malformed file");
     let cycle = gltf.replace(r#""camera": 0,"#, r#""camera": 0, "children": [1],"#);
-    dir.assert_fails(cycle, "cycle.gltf: node 1 is reached twice");
+    assert_fails(&dir, cycle, "cycle.gltf: node 1 is reached twice");
     let odd = gltf.replace(
         r#""count": 3, "type": "SCALAR""#,
         r#""count": 2, "type": "SCALAR""#,
     );
-    dir.assert_fails(odd, "odd.gltf: mesh 0 primitive 0: 2 corners is not");
+    assert_fails(&dir, odd, "odd.gltf: mesh 0 primitive 0: 2 corners is not");
 }
 
 #[test]
@@ -416,23 +395,23 @@ fn bad_toml_files_name_the_file_and_line() {
     let mesh = "[[mesh]]\npath = \"t.obj\"\n";
     let camera = "[camera]\neye = [0, 0, 5]\ntarget = [0, 0, 0]\nfov_y_deg = 60\n";
     let typo = format!("{mesh}{camera}fov = 50\n");
-    dir.assert_fails(typo, "typo.toml:7: unknown field `fov`");
+    assert_fails(&dir, typo, "typo.toml:7: unknown field `fov`");
     let missing = format!("{mesh}\n[[mesh]]\npath = \"gone.obj\"\n");
-    dir.assert_fails(missing, "missing.toml:4: mesh 'gone.obj': ");
-    let message = error_of(&dir.0.join("missing.toml"));
+    assert_fails(&dir, missing, "missing.toml:4: mesh 'gone.obj': ");
+    let message = error_of(&dir.join("missing.toml"));
     assert!(message.contains("gone.obj: cannot read file: "), "{message}");
     let light = "[light]\nposition = [0, 1, 0]\ndirection = [0, 0, 0]\ncone_half_angle_deg = 30\n";
     let dark = format!("{mesh}{light}");
-    dir.assert_fails(dark, "dark.toml:3: the light's direction must not be");
+    assert_fails(&dir, dark, "dark.toml:3: the light's direction must not be");
     let blind = format!("{mesh}{}", camera.replace("[0, 0, 5]", "[0, 0, 0]"));
-    dir.assert_fails(blind, "blind.toml:3: the camera's eye and target are");
-    dir.assert_fails("# nothing\n", "empty.toml: the scene names no meshes");
+    assert_fails(&dir, blind, "blind.toml:3: the camera's eye and target are");
+    assert_fails(&dir, "# nothing\n", "empty.toml: the scene names no meshes");
 }
 
 #[test]
 fn missing_files_and_unknown_formats_are_errors() {
     let dir = Scratch::new("missing");
-    let message = error_of(&dir.0.join("nothing.obj"));
+    let message = error_of(&dir.join("nothing.obj"));
     assert!(message.contains("nothing.obj: cannot read file: "), "{message}");
-    dir.assert_fails("v 0 0 0", "scene.xyz: unknown scene format '.xyz'");
+    assert_fails(&dir, "v 0 0 0", "scene.xyz: unknown scene format '.xyz'");
 }

@@ -2,15 +2,16 @@
 
 mod common;
 
+use glam::Vec3;
 use hmdist::accel::{Accel, BuildQuality};
 use hmdist::estimators::photon::{
-    trace_photons, PathRules, PhotonMethod, PhotonParams, PhotonSource, SourceKind,
+    trace_photons, PathRules, PhotonMethod, PhotonParams, PhotonSource, SourceKind, TracedPhoton,
 };
 use hmdist::estimators::{Estimator, PhotonEstimator};
 use hmdist::image::HmdImage;
 use hmdist::metrics::f_diff;
 use hmdist::progress::Silent;
-use hmdist::render::{render, RenderOptions};
+use hmdist::render::{primary_hits, render, RenderOptions, DEFAULT_SEED};
 use hmdist::sampling::Weighting;
 use hmdist::scene::procedural::validation;
 use hmdist::scene::Scene;
@@ -102,20 +103,96 @@ fn exactly_p_photons_are_stored_whatever_the_bounce_limit() {
         };
         let traced = trace_photons(&accel, &source, rules, budget, 7, &|_| {}).unwrap();
         assert_eq!(traced.photons.len(), budget);
-        assert!(
-            traced.photons.iter().all(|p| p.distance > 0.0),
-            "distances are positive"
-        );
-        assert!(traced
-            .photons
-            .iter()
-            .all(|p| (p.normal.length() - 1.0).abs() < 1e-4));
         if max_bounces == 1 {
             assert!(
                 traced.paths_traced as usize > budget,
                 "one photon per path at most, some absorbed"
             );
         }
+    }
+}
+
+/// The slab (floor at y = 0, ceiling at y = h, 2000 wide) and camera-sourced photons on it.
+fn slab_photons(budget: usize) -> (Scene, Vec<TracedPhoton>) {
+    let scene = validation::slab(validation::SLAB_HEIGHT, 1000.0);
+    let accel = Accel::build(&scene.mesh, BuildQuality::default());
+    let (w, h) = (4, 4);
+    let source = PhotonSource::Camera(scene.camera.rays(w, h), w, h);
+    let rules = PhotonParams::default().rules;
+    let traced = trace_photons(&accel, &source, rules, budget, DEFAULT_SEED, &|_| {}).unwrap();
+    (scene, traced.photons)
+}
+
+#[test]
+fn photons_are_stored_at_the_start_of_each_bounce_facing_where_they_came_from() {
+    // Between the slab's two planes a photon on the floor (y = 0) arrived from above: normal
+    // +y; one on the ceiling (y = h): normal −y. It leaves into its normal's hemisphere and
+    // its next hit is the other plane, at distance (other y − y) / ω_y, which is finite unless
+    // that point lies beyond the slab's edge.
+    let h = validation::SLAB_HEIGHT;
+    let (_, photons) = slab_photons(20_000);
+    let on_ceiling = photons.iter().filter(|p| p.position.y > 0.5 * h).count();
+    assert!(
+        on_ceiling > 5_000 && photons.len() - on_ceiling > 5_000,
+        "{on_ceiling} on the ceiling"
+    );
+    for p in &photons {
+        let (plane, other, normal) = if p.position.y > 0.5 * h {
+            (h, 0.0, Vec3::NEG_Y)
+        } else {
+            (0.0, h, Vec3::Y)
+        };
+        assert!((p.position.y - plane).abs() < 1e-5, "{p:?}");
+        assert_eq!(p.normal, normal, "{p:?}");
+        assert!(p.direction.dot(p.normal) > 0.0, "{p:?}");
+        let t = (other - p.position.y) / p.direction.y;
+        let q = p.position + t * p.direction;
+        let from_centre = q.x.abs().max(q.z.abs());
+        if from_centre < 999.0 {
+            // Hits on triangles 2000 wide are good to about 1e-4 in absolute terms.
+            assert!((p.distance - t).abs() < 1e-3, "{p:?}: expected distance {t}");
+        } else if from_centre > 1001.0 {
+            assert_eq!(p.distance, f32::INFINITY, "{p:?} escapes past the edge");
+        }
+    }
+}
+
+#[test]
+fn method_one_uses_the_photons_distance_and_method_two_the_distance_from_the_pixel() {
+    // One stored photon, at x on the floor, leaving along ω with its next hit q = x + d·ω on
+    // the ceiling. Every pixel (all see the floor, normal +y like the photon's) gathers it:
+    // method I gives H = d everywhere, method II H = |q − pixel's point|, which differs from
+    // pixel to pixel and from d.
+    let (scene, photons) = slab_photons(1);
+    let photon = photons[0];
+    let q = photon.position + photon.distance * photon.direction;
+    let size = 4;
+    let accel = Accel::build(&scene.mesh, BuildQuality::default());
+    let points = primary_hits(&accel, &scene, size, size).points;
+    let params = PhotonParams {
+        photons: 1,
+        gather: 1,
+        source: SourceKind::Camera,
+        ..PhotonParams::default()
+    };
+    let one = photon_image(&scene, PhotonMethod::StoredDistance, params, size, None).0;
+    let two = photon_image(&scene, PhotonMethod::NextHitPoint, params, size, None).0;
+    for ((h1, h2), point) in one.data.iter().zip(&two.data).zip(&points) {
+        let x = point.expect("every pixel sees the floor").point;
+        let from_pixel = q.distance(x);
+        assert!(
+            (h1 / photon.distance - 1.0).abs() < 1e-5,
+            "method I: {h1}, d = {}",
+            photon.distance
+        );
+        assert!(
+            (h2 / from_pixel - 1.0).abs() < 1e-5,
+            "method II: {h2}, |q − x| = {from_pixel}"
+        );
+        assert!(
+            (from_pixel / photon.distance - 1.0).abs() > 1e-3,
+            "the test tells them apart"
+        );
     }
 }
 

@@ -1,6 +1,6 @@
 //! `hmdist render`: one HMD image of one scene by one method.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::{Args, ValueEnum};
@@ -10,7 +10,7 @@ use hmdist::error::{Error, Result};
 use hmdist::estimators::cubemap::{self, Backend};
 use hmdist::estimators::photon::{self, PathRules, PhotonMethod, PhotonParams, SourceKind};
 use hmdist::estimators::{gather, Cubemap, Estimator, Gather, PhotonEstimator};
-use hmdist::image::{exr, picture, write_atomically};
+use hmdist::image::{exr, picture, OutputSet};
 use hmdist::render::{render, RenderOptions, DEFAULT_SEED};
 use hmdist::sampling::Weighting;
 use hmdist::scene::Scene;
@@ -202,9 +202,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     let png = args.png.unwrap_or_else(|| args.out.with_extension("png"));
     let json = args.json.unwrap_or_else(|| args.out.with_extension("json"));
-    for path in [&args.out, &png, &json] {
-        check_writable(path)?;
-    }
+    // Fails now, before a long render, if an output cannot be written.
+    let outputs = OutputSet::reserve(&[&args.out, &png, &json])?;
 
     let bar = Bar::new(args.quiet);
     bar.status("loading");
@@ -214,11 +213,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
     bar.status("BVH");
     let rendered = render(&scene, estimator.as_ref(), &options, load_seconds, &bar)?;
 
-    exr::write(&rendered.image, &args.out)?;
     let scale = args.scale.unwrap_or(scene.display_scale);
-    picture::write_png(&picture::grey(&rendered.image, scale), &png)?;
+    let exr_bytes = exr::encode(&rendered.image, &args.out)?;
+    let png_bytes = picture::encode_png(&picture::grey(&rendered.image, scale), &png)?;
     let text = serde_json::to_string_pretty(&rendered.report).expect("report serialises");
-    write_atomically(&json, text.as_bytes())?;
+    outputs.commit(&[&exr_bytes, &png_bytes, text.as_bytes()])?;
 
     if !args.quiet {
         let r = &rendered.report;
@@ -249,22 +248,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
             options.height,
             estimator.method(),
             r["seconds"]["total"].as_f64().unwrap_or(f64::NAN),
-            r["escaped_rays"],
+            // The cube map's rays fill texels; its directions are the lookups.
+            r.get("escaped_lookups").unwrap_or(&r["escaped_rays"]),
             r["background_pixels"],
             args.out.display(),
             png.display(),
             json.display(),
         );
     }
-    Ok(())
-}
-
-/// Fails now, before a long render, if `path` cannot be written.
-fn check_writable(path: &Path) -> Result<()> {
-    if path.is_dir() {
-        return Err(Error::file(path, "is a directory, not a file name"));
-    }
-    write_atomically(&path.with_extension("hmdist-write-test"), b"")?;
-    let _ = std::fs::remove_file(path.with_extension("hmdist-write-test"));
     Ok(())
 }

@@ -11,7 +11,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde_json::json;
 
-use super::{Estimate, EstimateContext, Estimator, GBuffer, HarmonicMean};
+use super::{Estimate, EstimateContext, Estimator, GBuffer, HarmonicMean, RayCount};
 use crate::accel::{Hit, RayCaster};
 use crate::error::{Error, Result};
 use crate::progress::Progress;
@@ -130,11 +130,15 @@ impl Estimator for Gather {
             });
         progress.finish();
         let surface_pixels = (gbuffer.points.len() - gbuffer.background_pixels()) as u64;
+        let seconds = start.elapsed().as_secs_f64();
         Ok(Estimate {
             hmd,
-            rays_cast: surface_pixels * self.rays as u64,
-            escaped_rays: escaped.into_inner(),
-            phases: vec![("estimate", start.elapsed().as_secs_f64())],
+            rays: Some(RayCount {
+                cast: surface_pixels * self.rays as u64,
+                escaped: escaped.into_inner(),
+                seconds,
+            }),
+            phases: vec![("estimate", seconds)],
             extra: Default::default(),
         })
     }

@@ -45,13 +45,22 @@ pub struct EstimateContext<'a> {
     pub clamp: DistanceClamp,
 }
 
+/// The rays an estimator cast through the scene (primary rays not included), for the report's
+/// `rays_cast`, `escaped_rays` and `mrays_per_s`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayCount {
+    pub cast: u64,
+    /// Rays that hit nothing (within `--max-distance`, where the estimator's rays stop there).
+    pub escaped: u64,
+    /// Seconds of the phase that cast them.
+    pub seconds: f64,
+}
+
 /// An estimator's output: H per pixel (row-major, row 0 at the top) and what it cost.
 pub struct Estimate {
     pub hmd: Vec<f32>,
-    /// Rays cast by the estimator (primary rays not included).
-    pub rays_cast: u64,
-    /// Rays that hit nothing (within `--max-distance`, where one is set).
-    pub escaped_rays: u64,
+    /// The rays cast; `None` for an estimator that casts none (the GPU cube map rasterises).
+    pub rays: Option<RayCount>,
     /// Named phases and their seconds, e.g. `("estimate", 1.2)`; written to the JSON sidecar.
     pub phases: Vec<(&'static str, f64)>,
     /// Method-specific figures for the JSON sidecar.

@@ -3,8 +3,10 @@
 //! CSV and Markdown tables and an HTML report.
 //!
 //! Every image an experiment needs is cached under `OUT/cache`, keyed by everything that
-//! determines it (scene, method, parameters, size, seed), and reused across experiments and
-//! reruns: an interrupted run resumes where it stopped.
+//! determines it (hmdist's version, the scene's content, method, parameters, size, seed), and
+//! reused across experiments and reruns: an interrupted run resumes where it stopped. The
+//! scene's content is its [`Scene::fingerprint`], so editing any file it was loaded from (a
+//! TOML scene's meshes included) renders again.
 //!
 //! Experiments: `table1` (with its grids `fig12`, `fig13` and a plot), `table2`, `fig9`,
 //! `table3` (with `fig14`, `fig15`), `fig10`, `table4`, `fig16_17`, `memory`.
@@ -24,7 +26,7 @@ use crate::estimators::Estimator;
 use crate::image::{exr, write_atomically, HmdImage};
 use crate::progress::{Progress, Silent};
 use crate::render::{render, RenderOptions};
-use crate::scene::Scene;
+use crate::scene::{stable_hash, Scene};
 pub use table::Table;
 
 /// Experiments by name, in the order `all` runs them.
@@ -109,8 +111,8 @@ pub struct Section {
 /// Runs experiments on one scene into one folder.
 pub struct Runner<'a> {
     pub scene: Scene,
-    /// Identifies the scene in cache keys: the built-in name, or the file with its size and
-    /// modification time.
+    /// Identifies the scene in cache keys: hmdist's version, the scene's name and the
+    /// fingerprint of its content.
     scene_key: String,
     pub preset: Preset,
     pub params: PresetParams,
@@ -122,10 +124,12 @@ pub struct Runner<'a> {
 impl<'a> Runner<'a> {
     pub fn new(scene_arg: &str, preset: Preset, out: &Path, progress: &'a dyn Progress) -> Result<Self> {
         let scene = Scene::load(scene_arg)?;
-        let scene_key = match std::fs::metadata(scene_arg) {
-            Ok(m) => format!("{scene_arg}:{}:{:?}", m.len(), m.modified().ok()),
-            Err(_) => scene_arg.to_string(),
-        };
+        let scene_key = format!(
+            "{}|{}|{:016x}",
+            env!("CARGO_PKG_VERSION"),
+            scene.name,
+            scene.fingerprint()
+        );
         std::fs::create_dir_all(out.join("cache"))
             .map_err(|e| Error::io(out, "create the output folder of", e))?;
         Ok(Runner {
@@ -196,7 +200,10 @@ impl<'a> Runner<'a> {
         );
         if let (Ok(image), Ok(text)) = (exr::read(&exr_path), std::fs::read_to_string(&json_path)) {
             if let Ok(report) = serde_json::from_str::<Value>(&text) {
-                return Ok((image, report));
+                // The version is in the key; a report that says otherwise was not ours.
+                if report["hmdist_version"] == env!("CARGO_PKG_VERSION") {
+                    return Ok((image, report));
+                }
             }
         }
         let options = RenderOptions {
@@ -213,11 +220,4 @@ impl<'a> Runner<'a> {
         self.progress.advance(1);
         Ok((rendered.image, rendered.report))
     }
-}
-
-/// FNV-1a, 64-bit: a hash that is the same in every build and on every machine.
-fn stable_hash(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
-        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
-    })
 }

@@ -12,6 +12,11 @@ use crate::error::{Error as HmdError, Result};
 pub const CHANNEL: &str = "Y";
 
 pub fn write(image: &HmdImage, path: &Path) -> Result<()> {
+    write_atomically(path, &encode(image, path)?)
+}
+
+/// The bytes of the EXR file of `image`; `path` names the file in errors.
+pub fn encode(image: &HmdImage, path: &Path) -> Result<Vec<u8>> {
     let channel = AnyChannel::new(CHANNEL, FlatSamples::F32(image.data.clone()));
     let layer = Layer::new(
         (image.width as usize, image.height as usize),
@@ -30,7 +35,7 @@ pub fn write(image: &HmdImage, path: &Path) -> Result<()> {
         .write()
         .to_buffered(&mut bytes)
         .map_err(|e| HmdError::file(path, format!("cannot encode EXR: {e}")))?;
-    write_atomically(path, bytes.get_ref())
+    Ok(bytes.into_inner())
 }
 
 /// Reads an EXR written by hmdist (or any EXR whose first layer has a `Y` channel, or a

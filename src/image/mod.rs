@@ -3,13 +3,14 @@
 //! An [`HmdImage`] holds H per pixel, row-major, row 0 at the top; NaN marks background
 //! pixels and holes, `+inf` pixels where every sample escaped. Every file is written to a
 //! temporary name beside its destination and renamed into place: a failed or interrupted write
-//! never leaves a half-written output.
+//! never leaves a half-written output. Files that belong together (a render's EXR, PNG and
+//! JSON) go through an [`OutputSet`]: all of them are written, or none.
 
 pub mod exr;
 pub mod picture;
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 
@@ -36,8 +37,8 @@ impl HmdImage {
     }
 }
 
-/// Writes `bytes` to `path` through a temporary file in the same folder and a rename.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
+/// The temporary file beside `path` that it is written to before the rename.
+fn temporary(path: &Path) -> Result<PathBuf> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
@@ -45,7 +46,12 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     let name = path
         .file_name()
         .ok_or_else(|| Error::file(path, "not a file name"))?;
-    let temp = dir.join(format!(".{}.{}.tmp", name.to_string_lossy(), std::process::id()));
+    Ok(dir.join(format!(".{}.{}.tmp", name.to_string_lossy(), std::process::id())))
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same folder and a rename.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
+    let temp = temporary(path)?;
     let written = std::fs::File::create(&temp)
         .and_then(|mut f| f.write_all(bytes).and_then(|_| f.sync_all()))
         .and_then(|_| std::fs::rename(&temp, path));
@@ -53,4 +59,144 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
         let _ = std::fs::remove_file(&temp);
         Error::io(path, "write", e)
     })
+}
+
+/// Output files that are written together or not at all, e.g. a render's EXR, PNG and JSON.
+///
+/// [`OutputSet::reserve`] creates each file's temporary beside it before the work starts, so
+/// an unwritable path fails at once (the error names that path, not the temporary).
+/// [`OutputSet::commit`] fills the temporaries and renames them into place; if any step fails
+/// it removes every temporary and every output already renamed, so a failure never leaves part
+/// of the set (an older file of the same name is then gone too). Dropped without a commit,
+/// it removes its temporaries.
+pub struct OutputSet {
+    /// (destination, temporary), in the order given.
+    files: Vec<(PathBuf, PathBuf)>,
+}
+
+impl OutputSet {
+    pub fn reserve(paths: &[&Path]) -> Result<OutputSet> {
+        let mut set = OutputSet { files: vec![] };
+        for (i, &path) in paths.iter().enumerate() {
+            if paths[..i].contains(&path) {
+                return Err(Error::file(
+                    path,
+                    "is named for two outputs: each needs its own file",
+                ));
+            }
+            if path.is_dir() {
+                return Err(Error::file(path, "is a directory, not a file name"));
+            }
+            let temp = temporary(path)?;
+            std::fs::File::create(&temp).map_err(|e| Error::io(path, "write", e))?;
+            set.files.push((path.to_path_buf(), temp));
+        }
+        Ok(set)
+    }
+
+    /// Writes `contents[i]` to the `i`-th path: every file, or (on error) none.
+    pub fn commit(mut self, contents: &[&[u8]]) -> Result<()> {
+        assert_eq!(contents.len(), self.files.len(), "one content per output");
+        let files = std::mem::take(&mut self.files);
+        let result = write_all(&files, contents);
+        if result.is_err() {
+            for (path, temp) in &files {
+                let _ = std::fs::remove_file(temp);
+                let _ = std::fs::remove_file(path);
+            }
+        }
+        result
+    }
+}
+
+/// Fills every temporary, then renames every one into place.
+fn write_all(files: &[(PathBuf, PathBuf)], contents: &[&[u8]]) -> Result<()> {
+    for ((path, temp), bytes) in files.iter().zip(contents) {
+        std::fs::File::create(temp)
+            .and_then(|mut f| f.write_all(bytes).and_then(|_| f.sync_all()))
+            .map_err(|e| Error::io(path, "write", e))?;
+    }
+    for (path, temp) in files {
+        std::fs::rename(temp, path).map_err(|e| Error::io(path, "write", e))?;
+    }
+    Ok(())
+}
+
+impl Drop for OutputSet {
+    fn drop(&mut self) {
+        for (_, temp) in &self.files {
+            let _ = std::fs::remove_file(temp);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A fresh folder for one test.
+    fn folder(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("hmdist-outputs-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    fn entries(dir: &Path) -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+
+    #[test]
+    fn a_set_is_written_whole() {
+        let dir = folder("whole");
+        let (a, b) = (dir.join("a.exr"), dir.join("a.json"));
+        OutputSet::reserve(&[&a, &b])
+            .unwrap()
+            .commit(&[b"exr", b"json"])
+            .unwrap();
+        assert_eq!(entries(&dir), ["a.exr", "a.json"]);
+        assert_eq!(std::fs::read(&b).unwrap(), b"json");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn an_unwritable_path_is_refused_at_reservation_by_its_own_name() {
+        let dir = folder("reserve");
+        let (exr, json) = (dir.join("hmd.exr"), dir.join("no/such/folder/hmd.json"));
+        let e = OutputSet::reserve(&[&exr, &json])
+            .err()
+            .expect("refused")
+            .to_string();
+        assert!(e.starts_with(&json.display().to_string()), "{e}");
+        assert!(!e.contains(".tmp"), "{e}");
+        assert_eq!(
+            entries(&dir),
+            Vec::<String>::new(),
+            "the EXR's temporary is removed"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_failure_after_the_first_file_is_in_place_leaves_none_of_the_set() {
+        // The PNG's destination turns into a folder after the reservation: its rename fails
+        // after the EXR's has succeeded.
+        let dir = folder("commit");
+        let (exr, png, json) = (dir.join("hmd.exr"), dir.join("hmd.png"), dir.join("hmd.json"));
+        let set = OutputSet::reserve(&[&exr, &png, &json]).unwrap();
+        std::fs::create_dir(&png).unwrap();
+        std::fs::write(png.join("keep"), b"").unwrap();
+        let e = set
+            .commit(&[b"exr", b"png", b"json"])
+            .expect_err("fails")
+            .to_string();
+        assert!(e.starts_with(&png.display().to_string()), "{e}");
+        assert_eq!(entries(&dir), ["hmd.png"], "only the folder that was in the way");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

@@ -23,9 +23,14 @@ pub fn grey(image: &HmdImage, scale: f32) -> GrayImage {
 }
 
 pub fn write_png(picture: &GrayImage, path: &Path) -> Result<()> {
+    write_atomically(path, &encode_png(picture, path)?)
+}
+
+/// The bytes of the PNG file of `picture`; `path` names the file in errors.
+pub fn encode_png(picture: &GrayImage, path: &Path) -> Result<Vec<u8>> {
     let mut bytes = Cursor::new(Vec::new());
     picture
         .write_to(&mut bytes, ImageFormat::Png)
         .map_err(|e| Error::file(path, format!("cannot encode PNG: {e}")))?;
-    write_atomically(path, bytes.get_ref())
+    Ok(bytes.into_inner())
 }

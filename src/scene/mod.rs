@@ -58,6 +58,39 @@ impl Scene {
     pub fn diagonal(&self) -> f32 {
         self.bounds().diagonal()
     }
+
+    /// A hash of everything in the scene that a render depends on: the vertices and triangles,
+    /// the camera, the spot light and the display scale (not the name). The same on every
+    /// machine; it changes when any file a scene was loaded from changes what was loaded.
+    pub fn fingerprint(&self) -> u64 {
+        let mut floats: Vec<f32> = self.mesh.positions.iter().flat_map(|p| p.to_array()).collect();
+        let c = &self.camera;
+        floats.extend(
+            c.eye
+                .to_array()
+                .into_iter()
+                .chain(c.target.to_array())
+                .chain(c.up.to_array()),
+        );
+        floats.extend([c.fov_y_deg, self.display_scale]);
+        if let Some(l) = &self.light {
+            floats.extend(l.position.to_array().into_iter().chain(l.direction.to_array()));
+            floats.push(l.cone_half_angle_deg);
+        }
+        let words = floats
+            .iter()
+            .map(|f| f.to_bits())
+            .chain([self.light.is_some() as u32])
+            .chain(self.mesh.indices.iter().flatten().copied());
+        stable_hash(&words.flat_map(u32::to_le_bytes).collect::<Vec<u8>>())
+    }
+}
+
+/// FNV-1a, 64-bit: a hash that is the same in every build and on every machine.
+pub fn stable_hash(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
+    })
 }
 
 /// A camera for a file that has none: looking at the centre of `bounds` from the front

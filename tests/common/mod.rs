@@ -1,12 +1,19 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod cli;
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use hmdist::error::Result;
 use hmdist::estimators::Gather;
 use hmdist::image::HmdImage;
 use hmdist::progress::Silent;
-use hmdist::render::{render, RenderOptions};
+use hmdist::render::{render, RenderOptions, Rendered};
 use hmdist::sampling::Weighting;
-use hmdist::scene::Scene;
+use hmdist::scene::{Camera, Mesh, Scene};
 
 /// Renders `scene` with `rays` cosine- or uniform-weighted gather rays at `width × height`.
 pub fn gather(
@@ -31,4 +38,105 @@ pub fn gather(
 pub fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.partial_cmp(b).unwrap());
     v[v.len() / 2]
+}
+
+/// A fresh, empty folder for one test under the system temp dir. Removed when the test
+/// passes; kept (and named on stderr) when it fails, to look at.
+pub struct Scratch(pub PathBuf);
+
+impl Scratch {
+    pub fn new(test: &str) -> Scratch {
+        let dir = std::env::temp_dir().join(format!("hmdist-test-{}-{test}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.0
+    }
+
+    pub fn join(&self, name: &str) -> PathBuf {
+        self.0.join(name)
+    }
+
+    /// Writes `contents` to `name` in the folder and returns its path.
+    pub fn write(&self, name: &str, contents: impl AsRef<[u8]>) -> PathBuf {
+        let path = self.0.join(name);
+        std::fs::write(&path, contents).unwrap();
+        path
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            eprintln!("test files kept in {}", self.0.display());
+        } else {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+}
+
+/// Set (by `.ci/run`, or any CI that sets `CI`) where a GPU test must run, never skip.
+pub const REQUIRE_GPU: &str = "HMDIST_REQUIRE_GPU";
+
+/// The result of a render on the cube map's GPU backend, or `None` where this machine has no
+/// Vulkan, Metal or DX12 adapter (see [`gpu_missing`]).
+pub fn gpu_or_skip(test: &str, result: Result<Rendered>) -> Option<Rendered> {
+    match result {
+        Ok(rendered) => Some(rendered),
+        Err(e) if gpu_missing(test, &e.to_string()) => None,
+        Err(e) => panic!("{test}: the GPU backend must run here: {e}"),
+    }
+}
+
+/// Whether `error` says that this machine has no Vulkan, Metal or DX12 adapter and the test
+/// may skip: then the skip and its reason go to stderr, written to it directly (libtest would
+/// hide `eprintln!` of a passing test). Where `HMDIST_REQUIRE_GPU` or `CI` is set, a missing
+/// adapter fails the test instead.
+pub fn gpu_missing(test: &str, error: &str) -> bool {
+    let required = std::env::var_os(REQUIRE_GPU).is_some() || std::env::var_os("CI").is_some();
+    if !error.contains("no Vulkan") {
+        return false;
+    }
+    assert!(
+        !required,
+        "{test}: the GPU backend must run here ({REQUIRE_GPU} or CI is set): {error}"
+    );
+    let _ = writeln!(
+        std::io::stderr(),
+        "SKIPPED {test}: {}. Install a Vulkan driver (Debian: mesa-vulkan-drivers libvulkan1); \
+         set {REQUIRE_GPU}=1 to make this a failure.",
+        error.trim()
+    );
+    true
+}
+
+/// A square floor at y = 0, `2·half_width` wide, seen straight down from `eye_height` by a
+/// camera over the origin: nothing above it, so every ray from it escapes. Its centre, and
+/// the edge its two triangles share, are off the origin, where a 1 × 1 image looks.
+pub fn floor(half_width: f32, eye_height: f32) -> Scene {
+    let mut mesh = Mesh::new();
+    let centre = Vec3::new(0.3, 0.0, 0.1);
+    add_square(&mut mesh, centre, Vec3::X * half_width, Vec3::Z * half_width);
+    Scene {
+        name: "floor".into(),
+        mesh,
+        camera: Camera {
+            eye: Vec3::new(0.0, eye_height, 0.0),
+            target: Vec3::ZERO,
+            up: Vec3::Z,
+            fov_y_deg: 60.0,
+        },
+        light: None,
+        display_scale: 0.25,
+    }
+}
+
+/// Adds the square `centre ± a ± b` as two triangles.
+pub fn add_square(mesh: &mut Mesh, centre: Vec3, a: Vec3, b: Vec3) {
+    let first = mesh.add_vertices([centre - a - b, centre + a - b, centre + a + b, centre - a + b]);
+    mesh.add_triangle(first, first + 1, first + 2);
+    mesh.add_triangle(first, first + 2, first + 3);
 }

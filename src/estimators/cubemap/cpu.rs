@@ -23,15 +23,42 @@ struct TexelCache {
     current: u32,
 }
 
-/// H per pixel, texel rays cast and how many of them escaped.
+/// What the CPU backend measured over the whole image.
+pub struct CpuEstimate {
+    pub hmd: Vec<f32>,
+    /// Rays cast to fill texels: one per texel looked up, per pixel.
+    pub texel_rays: u64,
+    /// Texel rays that met nothing.
+    pub escaped_texel_rays: u64,
+    /// Lookups (pixel, direction) whose texel holds no surface within `--max-distance`.
+    pub escaped_lookups: u64,
+}
+
+/// Counts of one pixel or row, summed into a [`CpuEstimate`].
+#[derive(Clone, Copy, Default)]
+struct Counts {
+    texel_rays: u64,
+    escaped_texel_rays: u64,
+    escaped_lookups: u64,
+}
+
+impl std::ops::AddAssign for Counts {
+    fn add_assign(&mut self, other: Counts) {
+        self.texel_rays += other.texel_rays;
+        self.escaped_texel_rays += other.escaped_texel_rays;
+        self.escaped_lookups += other.escaped_lookups;
+    }
+}
+
+/// H per pixel and the counts of [`CpuEstimate`].
 pub fn estimate(
     cubemap: &Cubemap,
     context: &EstimateContext,
     gbuffer: &GBuffer,
     progress: &dyn Progress,
-) -> (Vec<f32>, u64, u64) {
+) -> CpuEstimate {
     let width = gbuffer.width as usize;
-    let (cast, escaped) = (AtomicU64::new(0), AtomicU64::new(0));
+    let [cast, escaped, escaped_lookups] = [(); 3].map(|_| AtomicU64::new(0));
     let texels = cubemap.hemicube.texel_count();
     let mut hmd = vec![f32::NAN; gbuffer.points.len()];
     progress.start("cube maps", gbuffer.height as u64);
@@ -45,31 +72,37 @@ pub fn estimate(
                 current: 0,
             },
             |cache, (row, (out, points))| {
-                let (mut row_cast, mut row_escaped) = (0, 0);
+                let mut counts = Counts::default();
                 for (x, (h, point)) in out.iter_mut().zip(points).enumerate() {
                     let Some(hit) = point else { continue };
                     let pixel = (row * width + x) as u64;
-                    let (value, c, e) = pixel_estimate(cubemap, context, cache, hit, pixel);
+                    let (value, c) = pixel_estimate(cubemap, context, cache, hit, pixel);
                     *h = value;
-                    (row_cast, row_escaped) = (row_cast + c, row_escaped + e);
+                    counts += c;
                 }
-                cast.fetch_add(row_cast, Ordering::Relaxed);
-                escaped.fetch_add(row_escaped, Ordering::Relaxed);
+                cast.fetch_add(counts.texel_rays, Ordering::Relaxed);
+                escaped.fetch_add(counts.escaped_texel_rays, Ordering::Relaxed);
+                escaped_lookups.fetch_add(counts.escaped_lookups, Ordering::Relaxed);
                 progress.advance(1);
             },
         );
     progress.finish();
-    (hmd, cast.into_inner(), escaped.into_inner())
+    CpuEstimate {
+        hmd,
+        texel_rays: cast.into_inner(),
+        escaped_texel_rays: escaped.into_inner(),
+        escaped_lookups: escaped_lookups.into_inner(),
+    }
 }
 
-/// H at one pixel from its (lazily filled) hemicube; texel rays cast and escaped.
+/// H at one pixel from its (lazily filled) hemicube, and its counts.
 fn pixel_estimate(
     cubemap: &Cubemap,
     context: &EstimateContext,
     cache: &mut TexelCache,
     hit: &Hit,
     pixel: u64,
-) -> (f32, u64, u64) {
+) -> (f32, Counts) {
     cache.current = cache.current.wrapping_add(1);
     if cache.current == 0 {
         cache.stamp.fill(0);
@@ -79,7 +112,7 @@ fn pixel_estimate(
     let origin = hit.spawn_origin(hit.normal);
     let frame = Frame::from_normal(hit.normal);
     let grid = strata(cubemap.gather.rays);
-    let (mut cast, mut escaped) = (0, 0);
+    let mut counts = Counts::default();
     let mut mean = HarmonicMean::default();
     for j in 0..cubemap.gather.rays {
         let w = cubemap.gather.local_direction(grid, context.seed, pixel, j);
@@ -89,12 +122,14 @@ fn pixel_estimate(
             let t = context
                 .accel
                 .hit_distance(origin, frame.to_world(c), f32::INFINITY, Some(hit.triangle));
-            cast += 1;
-            escaped += t.is_infinite() as u64;
+            counts.texel_rays += 1;
+            counts.escaped_texel_rays += t.is_infinite() as u64;
             cache.depth[texel] = t * c.dot(face.axis());
             cache.stamp[texel] = cache.current;
         }
-        mean.add(cache.depth[texel] / along, context.clamp);
+        let d = cache.depth[texel] / along;
+        counts.escaped_lookups += (d > context.clamp.max || d.is_infinite()) as u64;
+        mean.add(d, context.clamp);
     }
-    (mean.value(), cast, escaped)
+    (mean.value(), counts)
 }

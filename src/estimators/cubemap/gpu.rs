@@ -50,6 +50,25 @@ struct Cube {
     n: [f32; 4],
 }
 
+/// What the lookup pass writes per hemicube (`Lookup` in the shader).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct LookupResult {
+    hmd: f32,
+    /// Lookups whose texel holds no surface (within `--max-distance`).
+    escaped: u32,
+}
+
+/// What the GPU backend measured over the whole image.
+pub struct GpuEstimate {
+    pub hmd: Vec<f32>,
+    pub texels_rasterised: u64,
+    /// Lookups (pixel, direction) whose texel holds no surface within `--max-distance`.
+    pub escaped_lookups: u64,
+    pub raster_seconds: f64,
+    pub lookup_seconds: f64,
+}
+
 /// A device that can run the hemicube pipeline, and what it is called.
 pub struct Gpu {
     device: wgpu::Device,
@@ -98,14 +117,14 @@ impl Gpu {
     }
 }
 
-/// H per pixel, texels rasterised, and seconds spent rasterising and looking up.
+/// H per pixel, with what it took: see [`GpuEstimate`].
 pub fn estimate(
     gpu: &Gpu,
     cubemap: &Cubemap,
     context: &EstimateContext,
     gbuffer: &GBuffer,
     progress: &dyn Progress,
-) -> Result<(Vec<f32>, u64, f64, f64)> {
+) -> Result<GpuEstimate> {
     let r = cubemap.hemicube.resolution;
     let side = MAX_ATLAS.min(gpu.max_texture);
     let (cols, rows) = (side / (2 * r), side / (6 * r));
@@ -144,7 +163,7 @@ fn estimate_batches(
     progress: &dyn Progress,
     atlas_size: (u32, u32),
     (cols, capacity): (u32, usize),
-) -> Result<(Vec<f32>, u64, f64, f64)> {
+) -> Result<GpuEstimate> {
     let r = cubemap.hemicube.resolution;
     let pipeline = Pipeline::new(gpu, context, atlas_size);
 
@@ -190,7 +209,7 @@ fn estimate_batches(
     };
 
     let mut hmd = vec![f32::NAN; gbuffer.points.len()];
-    let (mut raster, mut lookup) = (0.0, 0.0);
+    let (mut raster, mut lookup, mut escaped) = (0.0, 0.0, 0);
     progress.start("cube maps", pixels.len() as u64);
     for batch in pixels.chunks(capacity) {
         let cubes: Vec<Cube> = batch.iter().map(|(_, c)| *c).collect();
@@ -201,14 +220,20 @@ fn estimate_batches(
         let (values, t_raster, t_lookup) = pipeline.run(gpu, &params, &cubes)?;
         raster += t_raster;
         lookup += t_lookup;
-        for ((i, _), h) in batch.iter().zip(values) {
-            hmd[*i] = h;
+        for ((i, _), result) in batch.iter().zip(values) {
+            hmd[*i] = result.hmd;
+            escaped += result.escaped as u64;
         }
         progress.advance(batch.len() as u64);
     }
     progress.finish();
-    let texels = pixels.len() as u64 * cubemap.hemicube.texel_count() as u64;
-    Ok((hmd, texels, raster, lookup))
+    Ok(GpuEstimate {
+        hmd,
+        texels_rasterised: pixels.len() as u64 * cubemap.hemicube.texel_count() as u64,
+        escaped_lookups: escaped,
+        raster_seconds: raster,
+        lookup_seconds: lookup,
+    })
 }
 
 /// The render and compute pipelines and the resources that live across batches.
@@ -372,8 +397,9 @@ impl Pipeline {
         }
     }
 
-    /// Rasterises and looks up one batch; H per hemicube and the seconds of each half.
-    fn run(&self, gpu: &Gpu, params: &Params, cubes: &[Cube]) -> Result<(Vec<f32>, f64, f64)> {
+    /// Rasterises and looks up one batch; the result per hemicube and the seconds of each
+    /// half.
+    fn run(&self, gpu: &Gpu, params: &Params, cubes: &[Cube]) -> Result<(Vec<LookupResult>, f64, f64)> {
         let device = &gpu.device;
         let init = |label, contents: &[u8], usage| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -384,7 +410,7 @@ impl Pipeline {
         };
         let params_buffer = init("params", bytemuck::bytes_of(params), wgpu::BufferUsages::UNIFORM);
         let cube_buffer = init("cubes", bytemuck::cast_slice(cubes), wgpu::BufferUsages::STORAGE);
-        let out_size = (cubes.len() * 4) as u64;
+        let out_size = (cubes.len() * std::mem::size_of::<LookupResult>()) as u64;
         let output = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("hmd"),
             size: out_size,
@@ -491,7 +517,7 @@ impl Pipeline {
         let slice = readback.slice(..);
         slice.map_async(wgpu::MapMode::Read, |_| {});
         let _ = device.poll(wgpu::PollType::wait_indefinitely());
-        let values: Vec<f32> = match slice.get_mapped_range() {
+        let values: Vec<LookupResult> = match slice.get_mapped_range() {
             Ok(view) => bytemuck::cast_slice(&view).to_vec(),
             Err(e) => {
                 return Err(Error::parameter(format!(

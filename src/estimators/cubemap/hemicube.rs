@@ -151,6 +151,55 @@ mod tests {
     }
 
     #[test]
+    fn directions_fall_in_the_texels_worked_out_by_hand() {
+        // R = 2: the top face is 4 × 4 texels (indices 0..16), each side face 4 × 2 (+x from
+        // 16, −x from 24, +y from 32, −y from 40). A face's texel (col, row) has index
+        // offset + 4·row + col; col counts along the face's u, row along its v, from −1 (top
+        // face) or from the horizon (side faces, v = z). In-plane coordinates (s, t) are the
+        // direction divided by its component along the axis; col = ⌊(s + 1)·2⌋ and
+        // row = ⌊(t + 1)·2⌋ (top) or ⌊2t⌋ (sides).
+        let cube = Hemicube { resolution: 2 };
+        let cases = [
+            // top: u = x, v = y; s = 0.6, t = −0.4: col 3, row 1.
+            (Vec3::new(0.6, -0.4, 1.0), Face::Top, 4 + 3),
+            // +x: u = y, v = z; s = 0.2, t = 0.3: col 2, row 0.
+            (Vec3::new(1.0, 0.2, 0.3), Face::PosX, 16 + 2),
+            // −x: u = −y, v = z; s = −0.2, t = 0.6: col 1, row 1.
+            (Vec3::new(-1.0, 0.2, 0.6), Face::NegX, 24 + 4 + 1),
+            // +y: u = −x, v = z; s = −0.3, t = 0.1: col 1, row 0.
+            (Vec3::new(0.3, 1.0, 0.1), Face::PosY, 32 + 1),
+            // −y: u = x, v = z; s = 0.9, t = 0.7: col 3, row 1.
+            (Vec3::new(0.9, -1.0, 0.7), Face::NegY, 40 + 4 + 3),
+        ];
+        for (w, face, index) in cases {
+            let w = w.normalize();
+            let (found, i, along) = cube.lookup(w);
+            assert_eq!((found, i), (face, index), "direction {w}");
+            assert!((along - w.abs().max_element()).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn the_texel_found_contains_the_direction() {
+        // In the face's plane (the direction divided by its component along the axis) the
+        // direction lies within half a texel (1/R wide) of the texel centre it looks up.
+        for r in [1, 3, 16] {
+            let cube = Hemicube { resolution: r };
+            for j in 0..20_000 {
+                let w = hemisphere(Weighting::Uniform, random_pair(9, r as u64, j));
+                let (face, index, along) = cube.lookup(w);
+                let (centre_face, c) = cube.texel_direction(index);
+                assert_eq!(face, centre_face);
+                let offset = w / along - c / c.dot(face.axis());
+                assert!(
+                    offset.abs().max_element() <= 0.5 / r as f32 + 1e-5,
+                    "R = {r}: {w} is {offset} from its texel's centre"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn hemisphere_directions_spread_over_all_faces_and_stay_in_range() {
         let cube = Hemicube { resolution: 8 };
         let mut hits = vec![0; cube.texel_count()];

@@ -109,7 +109,12 @@ fn store_depth(@location(0) depth: f32) -> @location(0) vec4<f32> {
 // ---- lookups -------------------------------------------------------------------------------
 
 @group(0) @binding(2) var atlas: texture_2d<f32>;
-@group(0) @binding(3) var<storage, read_write> hmd: array<f32>;
+// Per hemicube: H, and how many of its lookups saw no surface (within --max-distance).
+struct Lookup {
+    hmd: f32,
+    escaped: u32,
+}
+@group(0) @binding(3) var<storage, read_write> results: array<Lookup>;
 
 // 64-bit integers as vec2(lo, hi).
 fn mul_hi32(x: u32, y: u32) -> u32 {
@@ -189,6 +194,7 @@ fn lookup(@builtin(global_invocation_id) id: vec3<u32>) {
     let one_below = 1.0 - 1.1920929e-7;
     var sum = 0.0;
     var carry = 0.0; // Kahan summation: up to 65,536 terms in f32
+    var escaped = 0u;
     for (var j = 0u; j < params.rays; j++) {
         let xi = random_pair(params.seed, vec2(pixel, 0u), j);
         let u = vec2(min((f32(j % a) + xi.x) / f32(a), one_below), min((f32(j / a) + xi.y) / f32(b), one_below));
@@ -218,21 +224,26 @@ fn lookup(@builtin(global_invocation_id) id: vec3<u32>) {
         var inverse = 0.0;
         if depth > 0.0 {
             var d = max(depth / along, params.d_min);
-            if params.has_max != 0u {
-                d = min(d, params.d_max);
+            if params.has_max != 0u && d > params.d_max {
+                d = params.d_max;
+                escaped++;
             }
             inverse = 1.0 / d;
-        } else if params.has_max != 0u {
-            inverse = 1.0 / params.d_max;
+        } else {
+            escaped++;
+            if params.has_max != 0u {
+                inverse = 1.0 / params.d_max;
+            }
         }
         let y = inverse - carry;
         let total = sum + y;
         carry = (total - sum) - y;
         sum = total;
     }
+    results[i].escaped = escaped;
     if sum > 0.0 {
-        hmd[i] = f32(params.rays) / sum;
+        results[i].hmd = f32(params.rays) / sum;
     } else {
-        hmd[i] = bitcast<f32>(0x7f800000u); // every direction escaped: +inf
+        results[i].hmd = bitcast<f32>(0x7f800000u); // every direction escaped: +inf
     }
 }

@@ -17,7 +17,7 @@ use std::time::Instant;
 
 use serde_json::json;
 
-use super::{Estimate, EstimateContext, Estimator, GBuffer, Gather};
+use super::{Estimate, EstimateContext, Estimator, GBuffer, Gather, RayCount};
 use crate::error::{Error, Result};
 use crate::progress::Progress;
 pub use hemicube::{Face, Hemicube};
@@ -93,37 +93,50 @@ impl Estimator for Cubemap {
             // A software rasteriser is slower than the CPU backend: auto wants real hardware.
             Backend::Auto => gpu::Gpu::open(false).ok(),
         };
+        let surface_pixels = (gbuffer.points.len() - gbuffer.background_pixels()) as u64;
+        let lookups = surface_pixels * self.gather.rays as u64;
         let Some(gpu) = gpu else {
             let start = Instant::now();
-            let (hmd, cast, escaped) = cpu::estimate(self, context, gbuffer, progress);
+            let cpu = cpu::estimate(self, context, gbuffer, progress);
+            let seconds = start.elapsed().as_secs_f64();
             let extra = json!({
                 "backend": "cpu",
                 "adapter": serde_json::Value::Null,
                 // The CPU fills only the texels that are looked up, one ray each.
-                "texels_rasterised": cast,
+                "texels_rasterised": cpu.texel_rays,
                 "texels_per_hemicube": self.hemicube.texel_count(),
+                "lookups": lookups,
+                "escaped_lookups": cpu.escaped_lookups,
             });
             return Ok(Estimate {
-                hmd,
-                rays_cast: cast,
-                escaped_rays: escaped,
+                hmd: cpu.hmd,
+                rays: Some(RayCount {
+                    cast: cpu.texel_rays,
+                    escaped: cpu.escaped_texel_rays,
+                    seconds,
+                }),
                 // The CPU backend fills a texel at its first lookup: build and lookup interleave.
-                phases: vec![("cubemap_build_and_lookup", start.elapsed().as_secs_f64())],
+                phases: vec![("cubemap_build_and_lookup", seconds)],
                 extra: crate::estimators::fields(extra),
             });
         };
-        let (hmd, texels, raster, lookup) = gpu::estimate(&gpu, self, context, gbuffer, progress)?;
+        let result = gpu::estimate(&gpu, self, context, gbuffer, progress)?;
         let extra = json!({
             "backend": "gpu",
             "adapter": gpu.adapter_name,
-            "texels_rasterised": texels,
+            "texels_rasterised": result.texels_rasterised,
             "texels_per_hemicube": self.hemicube.texel_count(),
+            "lookups": lookups,
+            "escaped_lookups": result.escaped_lookups,
         });
         Ok(Estimate {
-            hmd,
-            rays_cast: 0,
-            escaped_rays: 0,
-            phases: vec![("cubemap_build", raster), ("cubemap_lookup", lookup)],
+            hmd: result.hmd,
+            // Rasterisation casts no rays: rays_cast, escaped_rays and mrays_per_s are null.
+            rays: None,
+            phases: vec![
+                ("cubemap_build", result.raster_seconds),
+                ("cubemap_lookup", result.lookup_seconds),
+            ],
             extra: crate::estimators::fields(extra),
         })
     }

@@ -16,7 +16,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde_json::json;
 
-use super::{Estimate, EstimateContext, Estimator, GBuffer, HarmonicMean};
+use super::{Estimate, EstimateContext, Estimator, GBuffer, HarmonicMean, RayCount};
 use crate::error::{Error, Result};
 use crate::progress::Progress;
 pub use map::{PhotonMap, PhotonMethod};
@@ -168,6 +168,8 @@ impl Estimator for PhotonEstimator {
     fn parameters(&self) -> serde_json::Map<String, serde_json::Value> {
         let p = &self.params;
         let value = json!({
+            // No gather rays: H comes from the photon map.
+            "rays": serde_json::Value::Null,
             "photons": p.photons,
             "gather": p.gather,
             "source": p.source.name(),
@@ -203,6 +205,11 @@ impl Estimator for PhotonEstimator {
         let map = PhotonMap::build(&traced.photons, self.method)?;
         let photon_index = start.elapsed().as_secs_f64();
         let (stored, paths, escaped) = (traced.photons.len(), traced.paths_traced, traced.escaped);
+        let rays = RayCount {
+            cast: traced.rays_cast(),
+            escaped: traced.escaped_rays(),
+            seconds: photon_trace,
+        };
         drop(traced);
 
         let start = Instant::now();
@@ -220,9 +227,7 @@ impl Estimator for PhotonEstimator {
         });
         Ok(Estimate {
             hmd,
-            // One emission ray per path and one continuation ray per stored photon.
-            rays_cast: paths + stored as u64,
-            escaped_rays: escaped,
+            rays: Some(rays),
             phases: vec![
                 ("photon_trace", photon_trace),
                 ("photon_index", photon_index),

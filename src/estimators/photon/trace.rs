@@ -55,6 +55,21 @@ pub struct PhotonTrace {
     pub paths_traced: u64,
     /// Stored photons whose continuation escaped the scene.
     pub escaped: u64,
+    /// Paths whose emission ray missed the scene (they store no photon).
+    pub missed_emissions: u64,
+}
+
+impl PhotonTrace {
+    /// The rays of the paths that filled the map: one emission ray per path and one
+    /// continuation ray per stored photon (rays of a path beyond the budget not counted).
+    pub fn rays_cast(&self) -> u64 {
+        self.paths_traced + self.photons.len() as u64
+    }
+
+    /// Of [`PhotonTrace::rays_cast`], those that met nothing.
+    pub fn escaped_rays(&self) -> u64 {
+        self.missed_emissions + self.escaped
+    }
 }
 
 /// Traces paths in index order until exactly `budget` photons are stored.
@@ -67,14 +82,18 @@ pub fn trace_photons<R: RayCaster>(
     progress: &dyn Fn(usize),
 ) -> Result<PhotonTrace> {
     let mut photons: Vec<TracedPhoton> = Vec::with_capacity(budget);
-    let mut paths_traced = 0u64;
+    let (mut paths_traced, mut missed_emissions) = (0u64, 0u64);
     while photons.len() < budget {
-        let batch: Vec<Vec<TracedPhoton>> = (paths_traced..paths_traced + BATCH)
+        let batch: Vec<Option<Vec<TracedPhoton>>> = (paths_traced..paths_traced + BATCH)
             .into_par_iter()
             .map(|path| trace_path(accel, source, rules, seed, path))
             .collect();
         for path in batch {
             paths_traced += 1;
+            let Some(path) = path else {
+                missed_emissions += 1;
+                continue;
+            };
             let room = budget - photons.len();
             photons.extend(path.into_iter().take(room));
             if photons.len() == budget {
@@ -97,17 +116,18 @@ pub fn trace_photons<R: RayCaster>(
         photons,
         paths_traced,
         escaped,
+        missed_emissions,
     })
 }
 
-/// The photons of path `path`.
+/// The photons of path `path`; `None` if its emission ray misses the scene.
 fn trace_path<R: RayCaster>(
     accel: &R,
     source: &PhotonSource,
     rules: PathRules,
     seed: u64,
     path: u64,
-) -> Vec<TracedPhoton> {
+) -> Option<Vec<TracedPhoton>> {
     let mut counter = 0u64;
     let mut next_random = || {
         counter += 1;
@@ -115,9 +135,7 @@ fn trace_path<R: RayCaster>(
     };
     let (origin, direction) = source.emit(next_random());
     let mut photons = Vec::new();
-    let Some(mut hit) = accel.closest_hit(origin, direction, f32::INFINITY, None) else {
-        return photons;
-    };
+    let mut hit = accel.closest_hit(origin, direction, f32::INFINITY, None)?;
     let mut arriving = direction;
     for _ in 0..rules.max_bounces {
         let u = next_random();
@@ -149,7 +167,7 @@ fn trace_path<R: RayCaster>(
         }
         arriving = leaving;
     }
-    photons
+    Some(photons)
 }
 
 impl PhotonSource {
