@@ -178,3 +178,16 @@ fn a_ray_leaving_a_face_does_not_hit_its_coincident_duplicate() {
     }
     assert!(cast > 1_000_000, "{cast} rays");
 }
+
+#[test]
+fn a_ray_leaving_a_shared_edge_does_not_hit_the_neighbouring_triangle_of_its_plane() {
+    // Found by the contract tests of #9: an open floor seen from straight above puts the
+    // diagonal pixels exactly on the edge the floor's two triangles share; gather rays from
+    // there took the neighbour's within-error hit at t ≈ 1e-7 (H ≈ 1e-4, not +inf).
+    let mut scene = common::floor(2.0, 1.0);
+    scene.mesh = hmdist::scene::Mesh::new();
+    common::add_square(&mut scene.mesh, Vec3::ZERO, Vec3::X * 2.0, Vec3::Z * 2.0);
+    let (image, report) = common::gather(&scene, 64, 64, 64, Weighting::Cosine, None);
+    assert_eq!(report["escaped_rays"], report["rays_cast"]);
+    assert!(image.data.iter().all(|h| h.is_infinite()));
+}
