@@ -45,7 +45,7 @@ fn main() {
 
 fn write(name: &str, side: u32, rays: u32, file: &str) {
     let scene = Scene::load(name).expect("a scene");
-    let accel = Accel::build(&scene.mesh, BuildQuality::High);
+    let accel = Accel::build(&scene.mesh, BuildQuality::Fast);
     let gbuffer = primary_hits(&accel, &scene, side, side);
     let gather = Gather::new(rays, Weighting::Cosine).unwrap();
     let hits: Vec<_> = gbuffer

@@ -6,9 +6,10 @@
 //! - Our own wide BVH and kernels instead of obvhs's compressed wide BVH: its quantised nodes
 //!   cost about 250 instructions per node test on a CPU; a float node's eight slab tests are
 //!   about 25 AVX2 instructions, and a leaf block's eight triangle tests about 90.
-//! - obvhs still builds the binary BVH that is collapsed, and its preset decides trace speed
-//!   far more than build time does: [`BuildQuality::High`] (spatial splits, whole-tree
-//!   reinsertion) traces markedly faster than [`BuildQuality::Fast`], for a longer build.
+//! - The binary BVH that is collapsed comes from our binned SAH builder
+//!   ([`BuildQuality::Fast`]: about 10× faster to build than obvhs's best, 4–8 % slower to
+//!   trace) or from obvhs's slowest, best preset ([`BuildQuality::High`]); the default picks
+//!   by the rays to come ([`BuildQuality::Auto`]).
 //! - The node test is pbrt-v4's conservative one: slab distances `(b − o)·(1/d)` carry at most
 //!   three roundings, so the far distance is scaled by `1 + 2γ(3)`; with the watertight
 //!   triangle test, no ray slips through a closed mesh.
@@ -21,19 +22,18 @@ use obvhs::BvhBuildParams;
 use super::kernel::{Kernel, RayData};
 use super::traverse::{closest, stack_size, Closest, Counter, Entry, TraversalStats};
 use super::triangle::barycentric_point_error;
-use super::wide::{WideBvh, WIDTH};
+use super::wide::{BinaryBuilder, WideBvh, WIDTH};
 use super::{Hit, RayCaster};
 use crate::scene::Mesh;
 
 /// BVH build presets: build time against trace speed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum BuildQuality {
-    /// obvhs `fast_build` (PLOC, light reinsertion): about 0.5 µs per triangle (one core),
-    /// but in rooms with large wall triangles it traces 3–7× slower (`cube`, `hall`); on
-    /// evenly tessellated meshes about as fast as `High`.
+    /// Our binned SAH builder ([`super::sah`]), parallel: `cube` in 0.04 s and `hall` in
+    /// 0.3 s on 2 cores, tracing 4–8 % slower than `High`.
     Fast,
-    /// obvhs `very_slow_build` (spatial splits, whole-tree reinsertion): about 6 µs per
-    /// triangle, the fastest tracing.
+    /// obvhs `very_slow_build` (spatial splits, whole-tree reinsertion): the fastest tracing,
+    /// for about 4 µs per triangle on one core (`hall`: 2.6 s).
     High,
     /// `High` when the work to come casts at least [`AUTO_RAYS_PER_TRIANGLE`] rays per
     /// triangle, else `Fast` ([`BuildQuality::resolve`]); `High` where the work is unknown.
@@ -41,10 +41,10 @@ pub enum BuildQuality {
     Auto,
 }
 
-/// Where [`BuildQuality::Auto`] switches to `High`. Measured break-even on `hall`: the high
-/// build costs about 3.9 µs more per triangle and saves about 1.8 µs per gather ray, so it
-/// pays from about 2 rays per triangle; on a 5 M-triangle sphere it saves nothing.
-pub const AUTO_RAYS_PER_TRIANGLE: u64 = 4;
+/// Where [`BuildQuality::Auto`] switches to `High`. Measured break-even: on `hall` the high
+/// build costs about 2.3 s more and saves about 5 % of the tracing, which pays from about 300
+/// M gather rays (500 per triangle); on `cube` from about 600 per triangle.
+pub const AUTO_RAYS_PER_TRIANGLE: u64 = 500;
 
 impl BuildQuality {
     pub fn name(self) -> &'static str {
@@ -65,17 +65,16 @@ impl BuildQuality {
         }
     }
 
-    fn params(self) -> BvhBuildParams {
-        let params = match self {
-            BuildQuality::Fast => BvhBuildParams::fast_build(),
-            BuildQuality::High | BuildQuality::Auto => BvhBuildParams::very_slow_build(),
-        };
-        // A leaf block of up to eight triangles costs one kernel call however full it is, so
-        // leaves are made fuller than obvhs's default (3.0): 70 instead of 93 bytes per
-        // triangle on `cube`, and about 5 % faster.
-        BvhBuildParams {
-            collapse_traversal_cost: 5.0,
-            ..params
+    fn builder(self) -> BinaryBuilder {
+        match self {
+            BuildQuality::Fast => BinaryBuilder::Sah { pre_split: false },
+            // A leaf block of up to eight triangles costs one kernel call however full it
+            // is, so leaves are made fuller than obvhs's default (3.0): 70 instead of 93
+            // bytes per triangle on `cube`, and about 5 % faster.
+            BuildQuality::High | BuildQuality::Auto => BinaryBuilder::Obvhs(BvhBuildParams {
+                collapse_traversal_cost: 5.0,
+                ..BvhBuildParams::very_slow_build()
+            }),
         }
     }
 }
@@ -95,7 +94,7 @@ impl Accel {
     /// Builds the BVH (`Auto` builds `High`: resolve it first where the work is known); the
     /// kernel is [`Kernel::from_env`], or the best one if that fails.
     pub fn build(mesh: &Mesh, quality: BuildQuality) -> Accel {
-        let bvh = WideBvh::build(mesh, quality.params());
+        let bvh = WideBvh::build(mesh, quality.builder());
         let mut location = vec![0u32; mesh.triangle_count()];
         for (block, lanes) in bvh.block_triangles.iter().enumerate() {
             for (lane, &triangle) in lanes.iter().enumerate() {
@@ -252,9 +251,9 @@ mod tests {
     use super::*;
 
     #[test]
-    fn auto_builds_high_from_four_rays_per_triangle() {
-        assert_eq!(BuildQuality::Auto.resolve(399, 100), BuildQuality::Fast);
-        assert_eq!(BuildQuality::Auto.resolve(400, 100), BuildQuality::High);
+    fn auto_builds_high_from_500_rays_per_triangle() {
+        assert_eq!(BuildQuality::Auto.resolve(49_999, 100), BuildQuality::Fast);
+        assert_eq!(BuildQuality::Auto.resolve(50_000, 100), BuildQuality::High);
         assert_eq!(BuildQuality::Fast.resolve(1 << 40, 100), BuildQuality::Fast);
         assert_eq!(BuildQuality::High.resolve(0, 100), BuildQuality::High);
     }

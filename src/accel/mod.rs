@@ -25,6 +25,7 @@
 pub mod bvh;
 pub mod float_error;
 pub mod kernel;
+mod sah;
 pub mod traverse;
 pub mod triangle;
 pub mod wide;

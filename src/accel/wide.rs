@@ -2,8 +2,9 @@
 //! structure-of-arrays, one node per 256 bytes, leaves of up to 8 triangles stored
 //! structure-of-arrays so one 8-lane instruction tests them all.
 //!
-//! Built by collapsing a binary BVH from obvhs (PLOC, optional spatial splits, reinsertion:
-//! Meister & Bittner 2018, Meister et al. 2021): each wide node takes the two children of a
+//! Built by collapsing a binary BVH, from our binned SAH builder ([`super::sah`]) or from
+//! obvhs (PLOC, spatial splits, reinsertion: Meister & Bittner 2018, Meister et al. 2021):
+//! each wide node takes the two children of a
 //! binary node and repeatedly opens its largest-area inner child until it has eight (Wald et
 //! al. 2008; Embree's BVH8 and tinybvh's `BVH8_CPU` are built the same way). Nodes and leaf
 //! blocks are laid out in depth-first order, so a subtree's nodes are near each other.
@@ -71,20 +72,25 @@ pub struct WideBvh {
     pub depth: usize,
 }
 
+/// Which builder makes the binary BVH that is collapsed.
+#[derive(Clone, Copy, Debug)]
+pub enum BinaryBuilder {
+    /// Our binned SAH builder ([`super::sah`]), parallel; with obvhs's spatial pre-splits of
+    /// large triangles where `pre_split`.
+    Sah { pre_split: bool },
+    /// obvhs's builder with these parameters (leaves capped at [`WIDTH`] triangles).
+    Obvhs(BvhBuildParams),
+}
+
 impl WideBvh {
-    /// Builds the binary BVH with `params` (leaves of at most [`WIDTH`] triangles) and
-    /// collapses it.
-    pub fn build(mesh: &Mesh, params: BvhBuildParams) -> WideBvh {
+    /// Builds the binary BVH of `mesh` with `builder` and collapses it.
+    pub fn build(mesh: &Mesh, builder: BinaryBuilder) -> WideBvh {
         let triangles: Vec<Triangle> = (0..mesh.triangle_count())
             .map(|i| {
                 let [v0, v1, v2] = mesh.triangle(i).map(Vec3A::from);
                 Triangle { v0, v1, v2 }
             })
             .collect();
-        let params = BvhBuildParams {
-            max_prims_per_leaf: params.max_prims_per_leaf.min(WIDTH as u32),
-            ..params
-        };
         let mut wide = WideBvh {
             nodes: Vec::new(),
             blocks: Vec::new(),
@@ -95,7 +101,16 @@ impl WideBvh {
             wide.nodes.push(empty_node());
             return wide;
         }
-        let bvh2 = build_bvh2_from_tris(&triangles, params, &mut Duration::default());
+        let bvh2 = match builder {
+            BinaryBuilder::Sah { pre_split } => super::sah::build(&triangles, pre_split),
+            BinaryBuilder::Obvhs(params) => {
+                let params = BvhBuildParams {
+                    max_prims_per_leaf: params.max_prims_per_leaf.min(WIDTH as u32),
+                    ..params
+                };
+                build_bvh2_from_tris(&triangles, params, &mut Duration::default())
+            }
+        };
         let collapse = Collapse {
             bvh2: &bvh2,
             triangles: &triangles,
@@ -148,23 +163,27 @@ impl Collapse<'_> {
     fn node(&self, index: usize, wide: &mut WideBvh, depth: usize) -> (u32, Aabb) {
         wide.depth = wide.depth.max(depth);
         let first = self.bvh2.nodes[index].first_index as usize;
-        let mut children = vec![first, first + 1];
+        let mut children = [0usize; WIDTH];
+        children[..2].copy_from_slice(&[first, first + 1]);
+        let mut count = 2;
         // Open the inner child of largest area until there are eight children.
-        while children.len() < WIDTH {
-            let widest = children
-                .iter()
-                .enumerate()
-                .filter(|(_, &c)| self.bvh2.nodes[c].prim_count == 0)
-                .max_by(|(_, &a), (_, &b)| {
-                    let area = |c: usize| self.bvh2.nodes[c].aabb().half_area();
-                    area(a).total_cmp(&area(b))
-                })
-                .map(|(slot, _)| slot);
-            let Some(slot) = widest else { break };
+        while count < WIDTH {
+            let mut widest: Option<(usize, f32)> = None;
+            for (slot, &c) in children[..count].iter().enumerate() {
+                let node = &self.bvh2.nodes[c];
+                let area = node.aabb().half_area();
+                if node.prim_count == 0 && widest.is_none_or(|(_, a)| area > a) {
+                    widest = Some((slot, area));
+                }
+            }
+            let Some((slot, _)) = widest else { break };
             let opened = self.bvh2.nodes[children[slot]].first_index as usize;
+            children.copy_within(slot + 1..count, slot + 2);
             children[slot] = opened;
-            children.insert(slot + 1, opened + 1);
+            children[slot + 1] = opened + 1;
+            count += 1;
         }
+        let children = &children[..count];
         let position = wide.nodes.len();
         wide.nodes.push(empty_node());
         let mut node = empty_node();
@@ -226,8 +245,12 @@ mod tests {
     #[test]
     fn every_triangle_is_in_a_leaf_inside_every_box_above_it() {
         let mesh = icosphere(3, glam::Vec3::new(0.3, -0.2, 0.1), 2.0);
-        for params in [BvhBuildParams::fast_build(), BvhBuildParams::very_slow_build()] {
-            let wide = WideBvh::build(&mesh, params);
+        for (builder, pre_split) in [
+            (BinaryBuilder::Sah { pre_split: false }, false),
+            (BinaryBuilder::Sah { pre_split: true }, true),
+            (BinaryBuilder::Obvhs(BvhBuildParams::very_slow_build()), true),
+        ] {
+            let wide = WideBvh::build(&mesh, builder);
             let mut seen = vec![false; mesh.triangle_count()];
             // Walk the tree, checking each child's box contains what is below it.
             let mut stack = vec![(0u32, Aabb::LARGEST)];
@@ -247,7 +270,7 @@ mod tests {
                         for lane in 0..WIDTH {
                             seen[wide.block_triangles[block][lane] as usize] = true;
                             let [a, b, c] = wide.blocks[block].triangle(lane);
-                            if !params.pre_split {
+                            if !pre_split {
                                 for v in [a, b, c] {
                                     assert!(inner.contains_point(v));
                                 }

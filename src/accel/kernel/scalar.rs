@@ -36,18 +36,12 @@ impl Lanes for Scalar {
                 (node.bounds[row][lane] - ray.origin[axis]) * ray.inv_direction[axis]
             };
             let t_near = max(
-                max(
-                    max(slab(ray.near_row[0], 0), slab(ray.near_row[1], 1)),
-                    slab(ray.near_row[2], 2),
-                ),
-                0.0,
+                max(slab(ray.near_row[0], 0), slab(ray.near_row[1], 1)),
+                max(slab(ray.near_row[2], 2), 0.0),
             );
             let t_far = min(
-                min(
-                    min(slab(ray.far_row[0], 0), slab(ray.far_row[1], 1)),
-                    slab(ray.far_row[2], 2),
-                ),
-                t_max,
+                min(slab(ray.far_row[0], 0), slab(ray.far_row[1], 1)),
+                min(slab(ray.far_row[2], 2), t_max),
             ) * FAR_SCALE;
             *lane_near = t_near;
             mask |= ((t_near <= t_far) as u32) << lane;

@@ -1,0 +1,276 @@
+//! A binned SAH builder for the binary BVH that [`super::wide`] collapses (Wald 2007, "On
+//! fast Construction of SAH-based Bounding Volume Hierarchies"), parallel over subtrees.
+//!
+//! Why our own: obvhs's best preset (`very_slow_build`: PLOC, spatial splits, whole-tree
+//! reinsertion) traces fastest but builds `hall` (608 K triangles) in 2.7 s, where Embree's
+//! high-quality build takes 0.1–0.3 s; its fast preset builds in 0.3 s but traces `hall` 7×
+//! slower (PLOC's top levels suffer from large wall triangles). Top-down binned SAH over
+//! obvhs's pre-split references (large triangles' boxes split into smaller ones) gets close to
+//! the best tracing at a fraction of the build time; see `cargo bench --bench gather`.
+//!
+//! The tree is the same for any thread count: each node's references are partitioned in
+//! place by the same rule, and a subtree's nodes go to a range of the node array fixed by its
+//! position, not by which thread built it.
+
+use glam::{Vec3A, Vec4};
+use obvhs::aabb::Aabb;
+use obvhs::bvh2::node::Bvh2Node;
+use obvhs::bvh2::Bvh2;
+use obvhs::splits::split_aabbs_preset;
+use obvhs::triangle::Triangle;
+
+/// Bins per axis.
+const BINS: usize = 32;
+/// Most triangles in a leaf: one block of the wide BVH.
+const MAX_LEAF: usize = super::wide::WIDTH;
+/// Cost of a node visit against one triangle test in the SAH. A leaf block of up to eight
+/// triangles costs one kernel call however full it is, so leaves are kept rather full.
+const TRAVERSAL_COST: f32 = 4.0;
+/// Subtrees at least this large are built on another thread.
+const PARALLEL_REFERENCES: usize = 4096;
+
+/// One reference in 32 bytes (every level of the build streams them all): a box (of a whole
+/// triangle, or of a piece of a large one) with its triangle's index in `min.w`.
+#[derive(Clone, Copy)]
+struct Reference {
+    min: Vec4,
+    max: Vec4,
+}
+
+impl Reference {
+    fn new(bounds: Aabb, triangle: u32) -> Self {
+        Reference {
+            min: bounds.min.extend(f32::from_bits(triangle)),
+            max: bounds.max.extend(0.0),
+        }
+    }
+
+    fn triangle(&self) -> u32 {
+        self.min.w.to_bits()
+    }
+
+    fn bounds(&self) -> Aabb {
+        Aabb::new(self.min.truncate().into(), self.max.truncate().into())
+    }
+
+    /// Twice the centroid (no halving: only compared and binned).
+    fn centroid2(&self) -> Vec3A {
+        (self.min + self.max).truncate().into()
+    }
+}
+
+/// Builds the binary BVH of `triangles`, with spatial pre-splits where `pre_split`.
+pub fn build(triangles: &[Triangle], pre_split: bool) -> Bvh2 {
+    let mut boxes: Vec<Aabb> = triangles.iter().map(|t| t.aabb()).collect();
+    let mut indices: Vec<u32> = (0..triangles.len() as u32).collect();
+    if pre_split && !triangles.is_empty() {
+        let areas = boxes.iter().map(|b| b.half_area());
+        let largest = areas.clone().fold(0.0f32, f32::max);
+        let average = areas.sum::<f32>() / boxes.len() as f32;
+        split_aabbs_preset(&mut boxes, &mut indices, triangles, average, largest);
+    }
+    let mut references: Vec<Reference> = boxes
+        .iter()
+        .zip(&indices)
+        .map(|(&bounds, &triangle)| Reference::new(bounds, triangle))
+        .collect();
+    let n = references.len().max(1);
+    // Zeroed by the allocator: the pages of the slots a leafy tree never uses (most of them)
+    // are never touched.
+    let mut nodes: Vec<Bvh2Node> = bytemuck::zeroed_vec(2 * n - 1);
+    if !references.is_empty() {
+        let extent = Extent::of(&references);
+        let (root, below) = nodes.split_at_mut(1);
+        subtree(&mut references, extent, 0, &mut root[0], below, 1);
+    }
+    Bvh2 {
+        nodes,
+        primitive_indices: references.iter().map(|r| r.triangle()).collect(),
+        ..Bvh2::default()
+    }
+}
+
+/// The box of a set of references and the box of their (doubled) centroids.
+#[derive(Clone, Copy)]
+struct Extent {
+    bounds: Aabb,
+    centroids: Aabb,
+}
+
+impl Extent {
+    const EMPTY: Extent = Extent {
+        bounds: Aabb::INVALID,
+        centroids: Aabb::INVALID,
+    };
+
+    fn of(references: &[Reference]) -> Extent {
+        references.iter().fold(Extent::EMPTY, |e, r| e.with(r))
+    }
+
+    #[inline(always)]
+    fn with(mut self, r: &Reference) -> Extent {
+        self.bounds = self.bounds.union(&r.bounds());
+        self.centroids.extend(r.centroid2());
+        self
+    }
+
+    fn union(&self, other: &Extent) -> Extent {
+        Extent {
+            bounds: self.bounds.union(&other.bounds),
+            centroids: self.centroids.union(&other.centroids),
+        }
+    }
+}
+
+/// Builds the subtree of `references` (which start at `offset` in the final reference order,
+/// and span `extent`) into `node`, its descendants into `below`, whose first slot has index
+/// `base` in the node array. `below` holds at least `2·len − 2` slots: a binary tree over `len`
+/// references needs no more.
+fn subtree(
+    references: &mut [Reference],
+    extent: Extent,
+    offset: usize,
+    node: &mut Bvh2Node,
+    below: &mut [Bvh2Node],
+    base: usize,
+) {
+    let Some(split) = best_split(references, extent) else {
+        *node = Bvh2Node::new(extent.bounds, references.len() as u32, offset as u32);
+        return;
+    };
+    let left_len = split.left_len;
+    *node = Bvh2Node::new(extent.bounds, 0, base as u32);
+    let (children, rest) = below.split_at_mut(2);
+    let (left_children, right_children) = children.split_at_mut(1);
+    let (left_below, right_below) = rest.split_at_mut(2 * left_len - 2);
+    let (left, right) = references.split_at_mut(left_len);
+    let right_len = right.len();
+    let mut left_job = || {
+        subtree(
+            left,
+            split.left,
+            offset,
+            &mut left_children[0],
+            left_below,
+            base + 2,
+        )
+    };
+    let mut right_job = || {
+        subtree(
+            right,
+            split.right,
+            offset + left_len,
+            &mut right_children[0],
+            right_below,
+            base + 2 + 2 * left_len - 2,
+        )
+    };
+    if left_len.min(right_len) >= PARALLEL_REFERENCES {
+        rayon::join(left_job, right_job);
+    } else {
+        left_job();
+        right_job();
+    }
+}
+
+/// A chosen split: how many references go left (they are moved to the front) and the extent
+/// of each side.
+struct Split {
+    left_len: usize,
+    left: Extent,
+    right: Extent,
+}
+
+/// Partitions `references` by the cheapest binned SAH split, or returns `None` when a leaf
+/// is cheaper (or the references cannot be told apart and fit in one). One pass bins the
+/// references on all three axes at once; each bin keeps its extent, so the children's
+/// extents come from the bins, not from more passes.
+fn best_split(references: &mut [Reference], extent: Extent) -> Option<Split> {
+    let n = references.len();
+    if n <= 1 {
+        return None;
+    }
+    let centroids = extent.centroids;
+    let size = centroids.diagonal();
+    let scale = Vec3A::select(size.cmpgt(Vec3A::ZERO), BINS as f32 / size, Vec3A::ZERO);
+    let mut counts = [[0usize; BINS]; 3];
+    let mut bins = [[Extent::EMPTY; BINS]; 3];
+    for r in references.iter() {
+        let bin = ((r.centroid2() - centroids.min) * scale)
+            .as_uvec3()
+            .min(glam::UVec3::splat(BINS as u32 - 1));
+        for axis in 0..3 {
+            let b = bin[axis] as usize;
+            counts[axis][b] += 1;
+            bins[axis][b] = bins[axis][b].with(r);
+        }
+    }
+    let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, first bin on the right)
+    for axis in (0..3).filter(|&axis| size[axis] > 0.0) {
+        // Sweep from the right for the right-hand areas, then from the left.
+        let mut right_area = [0.0f32; BINS];
+        let mut right_count = [0usize; BINS];
+        let (mut right_box, mut count) = (Aabb::INVALID, 0);
+        for b in (1..BINS).rev() {
+            right_box = right_box.union(&bins[axis][b].bounds);
+            count += counts[axis][b];
+            right_area[b] = if count > 0 { right_box.half_area() } else { 0.0 };
+            right_count[b] = count;
+        }
+        let (mut left_box, mut left_count) = (Aabb::INVALID, 0);
+        for b in 1..BINS {
+            left_box = left_box.union(&bins[axis][b - 1].bounds);
+            left_count += counts[axis][b - 1];
+            if left_count == 0 || right_count[b] == 0 {
+                continue;
+            }
+            let cost = left_box.half_area() * left_count as f32 + right_area[b] * right_count[b] as f32;
+            if best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, axis, b));
+            }
+        }
+    }
+    let area = extent.bounds.half_area().max(f32::MIN_POSITIVE);
+    let Some((cost, axis, first_right)) = best else {
+        // All centroids coincide: a leaf if it fits, else halves by count.
+        if n <= MAX_LEAF {
+            return None;
+        }
+        let (left, right) = references.split_at(n / 2);
+        return Some(Split {
+            left_len: n / 2,
+            left: Extent::of(left),
+            right: Extent::of(right),
+        });
+    };
+    if n <= MAX_LEAF && (n as f32) <= TRAVERSAL_COST + cost / area {
+        return None;
+    }
+    let (min, scale) = (centroids.min[axis], scale[axis]);
+    let left_len = partition(references, |r| {
+        (((r.centroid2()[axis] - min) * scale) as usize).min(BINS - 1) < first_right
+    });
+    let side =
+        |range: std::ops::Range<usize>| bins[axis][range].iter().fold(Extent::EMPTY, |e, b| e.union(b));
+    Some(Split {
+        left_len,
+        left: side(0..first_right),
+        right: side(first_right..BINS),
+    })
+}
+
+/// Moves the references for which `left` holds to the front (order otherwise deterministic)
+/// and returns how many there are.
+fn partition(references: &mut [Reference], left: impl Fn(&Reference) -> bool) -> usize {
+    let mut i = 0;
+    let mut j = references.len();
+    while i < j {
+        if left(&references[i]) {
+            i += 1;
+        } else {
+            j -= 1;
+            references.swap(i, j);
+        }
+    }
+    i
+}
