@@ -29,8 +29,8 @@ use crate::scene::Mesh;
 /// BVH build presets: build time against trace speed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum BuildQuality {
-    /// Our binned SAH builder ([`super::sah`]), parallel: `cube` in 0.04 s and `hall` in
-    /// 0.3 s on 2 cores, tracing 4–8 % slower than `High`.
+    /// Our binned SAH builder ([`super::sah`]), parallel: `cube` in 0.03 s and `hall` in
+    /// 0.24 s on 2 cores, tracing 3–8 % slower than `High`.
     Fast,
     /// obvhs `very_slow_build` (spatial splits, whole-tree reinsertion): the fastest tracing,
     /// for about 4 µs per triangle on one core (`hall`: 2.6 s).
