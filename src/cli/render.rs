@@ -127,7 +127,7 @@ enum WeightingArg {
 enum BvhArg {
     /// high when the render casts at least 500 rays per triangle, else fast.
     Auto,
-    /// Binned SAH, parallel: builds about 10x faster than high, traces 4-8% slower.
+    /// Binned SAH, parallel: builds about 10x faster than high, traces 3-8% slower.
     Fast,
     /// Spatial splits and whole-tree reinsertion: the fastest tracing.
     High,
