@@ -7,7 +7,10 @@
 //! each wide node takes the two children of a
 //! binary node and repeatedly opens its largest-area inner child until it has eight (Wald et
 //! al. 2008; Embree's BVH8 and tinybvh's `BVH8_CPU` are built the same way). Nodes and leaf
-//! blocks are laid out in depth-first order, so a subtree's nodes are near each other.
+//! blocks are laid out in depth-first order, so a subtree's nodes are near each other. (The
+//! collapse runs on one thread: collapsing the root's subtrees in parallel and appending them
+//! was measured slower, 3.3–3.6 s against 2.5–2.9 s for a 5.2 M-triangle build, as each part's
+//! vectors grow and are copied again.)
 //!
 //! Boxes are computed here, bottom-up, from the triangles themselves, not taken from obvhs:
 //! with spatial splits obvhs clips a triangle's box at a split plane with rounded arithmetic,
