@@ -137,25 +137,24 @@ impl Accel {
         leaving: Option<u32>,
         stats: &mut TraversalStats,
     ) -> f32 {
-        self.trace(origin, direction, t_max, leaving, stats)
+        self.trace(&RayData::new(origin, direction), t_max, leaving, stats)
             .map_or(f32::INFINITY, |c| c.t)
     }
 
-    /// The closest hit, with the kernel chosen at build.
+    /// The closest hit along `ray`, with the kernel chosen at build; `None` for a ray with a
+    /// NaN or infinite component, which would pass every box test (`maxps`/`minps` drop a NaN)
+    /// and reach empty slots.
     #[inline]
     fn trace<C: Counter>(
         &self,
-        origin: Vec3,
-        direction: Vec3,
+        ray: &RayData,
         t_max: f32,
         leaving: Option<u32>,
         counter: &mut C,
     ) -> Option<Closest> {
-        if !(origin.is_finite() && direction.is_finite()) {
-            // A NaN would pass every box test (`maxps`/`minps` drop it) and reach empty slots.
+        if !ray.is_finite() {
             return None;
         }
-        let ray = RayData::new(origin, direction);
         let accept = |block: u32, lane: usize| self.may_take_within_error_hit(leaving, block, lane);
         let needed = stack_size(self.bvh.depth);
         let mut inline = [MaybeUninit::<Entry>::uninit(); INLINE_STACK];
@@ -170,14 +169,14 @@ impl Accel {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: `with_kernel` and `Kernel::from_env` only choose kernels the CPU has.
             Kernel::Avx2 => unsafe {
-                super::kernel::avx2::closest_avx2(&self.bvh, &ray, t_max, &accept, stack, counter)
+                super::kernel::avx2::closest_avx2(&self.bvh, ray, t_max, &accept, stack, counter)
             },
             #[cfg(target_arch = "x86_64")]
             // SAFETY: as above.
             Kernel::Avx512 => unsafe {
-                super::kernel::avx2::closest_avx512(&self.bvh, &ray, t_max, &accept, stack, counter)
+                super::kernel::avx2::closest_avx512(&self.bvh, ray, t_max, &accept, stack, counter)
             },
-            _ => closest::<super::kernel::scalar::Scalar, C>(&self.bvh, &ray, t_max, &accept, stack, counter),
+            _ => closest::<super::kernel::scalar::Scalar, C>(&self.bvh, ray, t_max, &accept, stack, counter),
         }
     }
 
@@ -235,13 +234,14 @@ fn coplanar(triangle: [Vec3A; 3], other: [Vec3A; 3]) -> bool {
 
 impl RayCaster for Accel {
     fn closest_hit(&self, origin: Vec3, direction: Vec3, t_max: f32, leaving: Option<u32>) -> Option<Hit> {
-        let closest = self.trace(origin, direction, t_max, leaving, &mut ())?;
-        Some(self.hit_from(closest, &RayData::new(origin, direction)))
+        let ray = RayData::new(origin, direction);
+        let closest = self.trace(&ray, t_max, leaving, &mut ())?;
+        Some(self.hit_from(closest, &ray))
     }
 
     #[inline]
     fn hit_distance(&self, origin: Vec3, direction: Vec3, t_max: f32, leaving: Option<u32>) -> f32 {
-        self.trace(origin, direction, t_max, leaving, &mut ())
+        self.trace(&RayData::new(origin, direction), t_max, leaving, &mut ())
             .map_or(f32::INFINITY, |c| c.t)
     }
 }
@@ -249,6 +249,36 @@ impl RayCaster for Accel {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rays_with_nan_or_infinite_components_miss_without_panicking() {
+        // Two triangles: the root has empty slots, which a NaN ray would reach.
+        let mut mesh = Mesh::new();
+        let first = mesh.add_vertices([
+            Vec3::new(1.0, -1.0, -1.0),
+            Vec3::new(1.0, 1.0, -1.0),
+            Vec3::new(1.0, 1.0, 1.0),
+            Vec3::new(1.0, -1.0, 1.0),
+        ]);
+        mesh.indices = vec![[first, first + 1, first + 2], [first, first + 2, first + 3]];
+        let accel = Accel::build(&mesh, BuildQuality::Fast);
+        for kernel in Kernel::ALL.into_iter().filter(|k| k.available()) {
+            let accel = Accel::build(&mesh, BuildQuality::Fast).with_kernel(kernel);
+            for (o, d) in [
+                (Vec3::ZERO, Vec3::new(f32::NAN, 0.5, 0.5)),
+                (Vec3::ZERO, Vec3::splat(f32::NAN)),
+                (Vec3::ZERO, Vec3::new(f32::INFINITY, 0.0, 0.0)),
+                (Vec3::splat(f32::NAN), Vec3::X),
+            ] {
+                assert_eq!(accel.hit_distance(o, d, f32::INFINITY, None), f32::INFINITY);
+                assert!(accel.closest_hit(o, d, f32::INFINITY, Some(0)).is_none());
+            }
+        }
+        // The same rays without the NaN do hit (the test can fail).
+        assert!(accel
+            .hit_distance(Vec3::ZERO, Vec3::X, f32::INFINITY, None)
+            .is_finite());
+    }
 
     #[test]
     fn auto_builds_high_from_500_rays_per_triangle() {

@@ -130,6 +130,14 @@ impl RayData {
         }
     }
 
+    /// Whether origin and direction were finite: `1/d` is NaN for a NaN component and 0 for an
+    /// infinite one (a zero component was replaced by a tiny one).
+    #[inline(always)]
+    pub fn is_finite(&self) -> bool {
+        self.origin.iter().all(|v| v.is_finite())
+            && self.inv_direction.iter().all(|v| v.is_finite() && *v != 0.0)
+    }
+
     /// The ray origin in the watertight test's permuted axes.
     #[inline(always)]
     pub fn permuted_origin(&self) -> [f32; 3] {
