@@ -32,14 +32,15 @@ fn main() {
             runs.push((name, Box::new(Cubemap::new(gather, 64, backend).unwrap())));
         }
         for (backend, estimator) in runs {
-            match render(&scene, estimator.as_ref(), &options, 0.0, &Silent) {
+            match render(&scene, estimator.as_ref(), &options, &Silent) {
                 Ok(r) => {
-                    let s = r.report["seconds"]["estimate"].as_f64().unwrap();
+                    let s = r.report.seconds.estimate;
+                    let cubemap = r.report.details.cubemap.as_ref();
                     println!(
                         "{:<8} {backend:<7} {rays:>5}  {s:>8.2}  {:>8.0}  {}",
                         estimator.method(),
                         (size * size) as f64 / s,
-                        r.report.get("adapter").and_then(|a| a.as_str()).unwrap_or("-")
+                        cubemap.and_then(|c| c.adapter.as_deref()).unwrap_or("-")
                     );
                 }
                 Err(e) => println!("{:<8} {backend:<7} {rays:>5}  skipped: {e}", estimator.method()),

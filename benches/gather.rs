@@ -94,7 +94,7 @@ fn throughput(accel: &Accel, scene: &Scene, gbuffer: &GBuffer, rays: u32) -> (f6
             .unwrap();
         let start = Instant::now();
         let estimate = pool
-            .install(|| gather.estimate(&context, gbuffer, &Silent))
+            .install(|| hmdist::render::estimate(&gather, &context, gbuffer, &Silent))
             .unwrap();
         let rays = estimate.rays.expect("gather counts its rays");
         figures[i] = rays.cast as f64 / start.elapsed().as_secs_f64() / 1e6;

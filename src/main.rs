@@ -12,7 +12,7 @@ fn main() -> ExitCode {
     let code = match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("hmdist: error: {err}");
+            eprintln!("hmdist: error: {}", cli::describe(&err));
             ExitCode::from(2)
         }
     };

@@ -1,18 +1,22 @@
 //! The render driver: scene → BVH → primary hits → estimator → image and report (SPEC §2, §7).
 //!
-//! It owns the loop over pixels for primary rays and nothing else; the estimators own theirs.
-//! The output depends only on (scene, camera, method, parameters, seed): never on `threads`.
+//! It owns the loops over pixels: primary rays, then the estimator's pixels, rows in
+//! parallel, with progress, ray and hole counts and timings; an estimator implements one
+//! pixel ([`crate::estimators::PixelWorker`]). The output depends only on (scene, camera,
+//! method, parameters, seed): never on `threads`.
 
 use std::time::Instant;
 
 use rayon::prelude::*;
-use serde_json::{json, Value};
 
 use crate::accel::{Accel, BuildQuality, Kernel, RayCaster};
 use crate::error::{Error, Result};
-use crate::estimators::{DistanceClamp, EstimateContext, Estimator, GBuffer};
+use crate::estimators::{
+    DistanceClamp, Estimate, EstimateContext, Estimator, GBuffer, PixelPass, PixelWork, RayCount, Tally, Work,
+};
 use crate::image::HmdImage;
 use crate::progress::Progress;
+use crate::report::{BoundsReport, CameraReport, LightReport, RenderReport, Seconds};
 use crate::scene::Scene;
 
 /// Default image size (SPEC §2).
@@ -22,16 +26,21 @@ pub const DEFAULT_SEED: u64 = 1;
 /// Largest image accepted: 64 M pixels (the G-buffer alone then takes about 3 GB).
 pub const MAX_PIXELS: u64 = 1 << 26;
 
-/// How to render, apart from the estimator and its parameters.
+/// How to render, apart from the estimator and its parameters. Checked by [`render`]
+/// ([`RenderOptions::validate`]).
 #[derive(Clone, Debug)]
 pub struct RenderOptions {
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
+    /// Seed of the counter-based random numbers.
     pub seed: u64,
     /// Worker threads; `None` uses every core. Never changes the output.
     pub threads: Option<usize>,
-    /// `--max-distance`: clamp distances (and count escapes) at this value.
+    /// Clamp distances (and count escapes) at this value; `None` for no clamp.
     pub max_distance: Option<f32>,
+    /// The BVH preset.
     pub bvh_quality: BuildQuality,
 }
 
@@ -49,62 +58,72 @@ impl Default for RenderOptions {
 }
 
 impl RenderOptions {
+    /// Refuses an empty or oversized image, a non-positive `max_distance` and zero threads.
     pub fn validate(&self) -> Result<()> {
-        if self.width == 0 || self.height == 0 {
-            return Err(Error::parameter(format!(
-                "the image size {}x{} is empty: width and height must be at least 1",
-                self.width, self.height
-            )));
+        let (w, h) = (self.width, self.height);
+        if w == 0 || h == 0 {
+            let message = format!("{w}x{h} is empty: width and height must be at least 1");
+            return Err(Error::invalid("size", message));
         }
-        if self.width as u64 * self.height as u64 > MAX_PIXELS {
-            return Err(Error::parameter(format!(
-                "the image size {}x{} exceeds the limit of {MAX_PIXELS} pixels",
-                self.width, self.height
-            )));
+        if w as u64 * h as u64 > MAX_PIXELS {
+            let message = format!("{w}x{h} exceeds the limit of {MAX_PIXELS} pixels");
+            return Err(Error::invalid("size", message));
         }
-        if let Some(d) = self.max_distance {
-            if d.is_nan() || d <= 0.0 {
-                return Err(Error::parameter(format!(
-                    "--max-distance must be positive, not {d}"
-                )));
-            }
-        }
+        validate_max_distance(self.max_distance)?;
         if self.threads == Some(0) {
-            return Err(Error::parameter("--threads must be at least 1"));
+            return Err(Error::invalid("threads", "must be at least 1, not 0"));
         }
         Ok(())
     }
 }
 
-/// An HMD image and its JSON report (SPEC §7 keys).
-pub struct Rendered {
-    pub image: HmdImage,
-    pub report: Value,
+/// Refuses a `max_distance` that is not a positive number.
+pub(crate) fn validate_max_distance(max_distance: Option<f32>) -> Result<()> {
+    match max_distance {
+        Some(d) if d.is_nan() || d <= 0.0 => Err(Error::invalid(
+            "max_distance",
+            format!("must be positive, not {d}"),
+        )),
+        _ => Ok(()),
+    }
 }
 
-/// Renders `scene` with `estimator`. `load_seconds` is how long loading the scene took, for
-/// the report.
+/// Runs `f` on a pool of `threads` workers (`None`: every core).
+pub(crate) fn in_pool<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()
+        .map_err(|e| Error::parameter(format!("cannot start worker threads: {e}")))?;
+    Ok(pool.install(f))
+}
+
+/// An HMD image and its report (SPEC §7).
+pub struct Rendered {
+    /// H per pixel.
+    pub image: HmdImage,
+    /// Parameters, statistics and timings; `seconds.load` is 0 until the caller that loaded
+    /// the scene adds it ([`RenderReport::add_load_seconds`]).
+    pub report: RenderReport,
+}
+
+/// Renders `scene` with `estimator`.
 pub fn render(
     scene: &Scene,
     estimator: &dyn Estimator,
     options: &RenderOptions,
-    load_seconds: f64,
     progress: &dyn Progress,
 ) -> Result<Rendered> {
     options.validate()?;
     scene.validate()?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(options.threads.unwrap_or(0))
-        .build()
-        .map_err(|e| Error::parameter(format!("cannot start worker threads: {e}")))?;
-    pool.install(|| render_in_pool(scene, estimator, options, load_seconds, progress))
+    in_pool(options.threads, || {
+        render_in_pool(scene, estimator, options, progress)
+    })?
 }
 
 fn render_in_pool(
     scene: &Scene,
     estimator: &dyn Estimator,
     options: &RenderOptions,
-    load_seconds: f64,
     progress: &dyn Progress,
 ) -> Result<Rendered> {
     let kernel = Kernel::from_env()?;
@@ -130,59 +149,124 @@ fn render_in_pool(
         clamp: DistanceClamp::for_diagonal(l_diag, options.max_distance),
     };
     let estimate_start = Instant::now();
-    let estimate = estimator.estimate(&context, &gbuffer, progress)?;
+    let estimate = estimate(estimator, &context, &gbuffer, progress)?;
     let estimate_seconds = estimate_start.elapsed().as_secs_f64();
 
-    let mut seconds = json!({
-        "load": load_seconds,
-        "accel_build": accel_build,
-        "primary": primary,
-        "estimate": estimate_seconds,
-        "total": load_seconds + start.elapsed().as_secs_f64(),
-    });
-    for (phase, s) in &estimate.phases {
-        seconds[*phase] = json!(s);
-    }
-    let mut report = json!({
-        "hmdist_version": env!("CARGO_PKG_VERSION"),
-        "method": estimator.method(),
-        "scene": scene.name,
-        "width": options.width,
-        "height": options.height,
-        "seed": options.seed,
-        "threads": rayon::current_num_threads(),
-        "kernel": kernel.name(),
-        "bvh": bvh.name(),
-        "max_distance": options.max_distance,
-        "triangles": scene.mesh.triangle_count(),
-        "l_diag": l_diag,
-        "d_min": context.clamp.min,
-        "bounds": { "min": bounds.min.to_array(), "max": bounds.max.to_array() },
-        "camera": {
-            "eye": scene.camera.eye.to_array(),
-            "target": scene.camera.target.to_array(),
-            "up": scene.camera.up.to_array(),
-            "fov_y_deg": scene.camera.fov_y_deg,
+    let camera = &scene.camera;
+    let report = RenderReport {
+        hmdist_version: env!("CARGO_PKG_VERSION").into(),
+        method: estimator.method().into(),
+        scene: scene.name.clone(),
+        width: options.width,
+        height: options.height,
+        seed: options.seed,
+        threads: rayon::current_num_threads(),
+        kernel: kernel.name().into(),
+        bvh: bvh.name().into(),
+        max_distance: options.max_distance,
+        triangles: scene.mesh.triangle_count(),
+        l_diag,
+        d_min: context.clamp.min,
+        bounds: BoundsReport {
+            min: bounds.min.to_array(),
+            max: bounds.max.to_array(),
         },
-        "light": scene.light.map(|l| json!({
-            "position": l.position.to_array(),
-            "direction": l.direction.to_array(),
-            "cone_half_angle_deg": l.cone_half_angle_deg,
-        })),
-        "display_scale": scene.display_scale,
-        "background_pixels": gbuffer.background_pixels(),
-        "rays_cast": estimate.rays.map(|r| r.cast),
-        "escaped_rays": estimate.rays.map(|r| r.escaped),
-        "mrays_per_s": estimate.rays.map(|r| r.cast as f64 / r.seconds.max(1e-9) / 1e6),
-        "seconds": seconds,
-    });
-    let fields = report.as_object_mut().expect("report is an object");
-    fields.extend(estimator.parameters());
-    fields.extend(estimate.extra);
+        camera: CameraReport {
+            eye: camera.eye.to_array(),
+            target: camera.target.to_array(),
+            up: camera.up.to_array(),
+            fov_y_deg: camera.fov_y_deg,
+        },
+        light: scene.light.map(|l| LightReport {
+            position: l.position.to_array(),
+            direction: l.direction.to_array(),
+            cone_half_angle_deg: l.cone_half_angle_deg,
+        }),
+        display_scale: scene.display_scale,
+        background_pixels: gbuffer.background_pixels(),
+        rays_cast: estimate.rays.map(|r| r.cast),
+        escaped_rays: estimate.rays.map(|r| r.escaped),
+        mrays_per_s: estimate.rays.map(|r| r.cast as f64 / r.seconds.max(1e-9) / 1e6),
+        seconds: Seconds {
+            load: 0.0,
+            accel_build,
+            primary,
+            estimate: estimate_seconds,
+            total: start.elapsed().as_secs_f64(),
+            phases: estimate.phases,
+        },
+        parameters: estimator.parameters(),
+        details: estimate.details,
+    };
     Ok(Rendered {
         image: HmdImage::new(options.width, options.height, estimate.hmd),
         report,
     })
+}
+
+/// H per pixel of `gbuffer` by `estimator`: its preparation, then the driver's pixel loop (or
+/// the whole image it estimated itself). Runs on the current rayon pool.
+pub fn estimate(
+    estimator: &dyn Estimator,
+    context: &EstimateContext,
+    gbuffer: &GBuffer,
+    progress: &dyn Progress,
+) -> Result<Estimate> {
+    Ok(match estimator.prepare(context, gbuffer, progress)? {
+        Work::Done(estimate) => estimate,
+        Work::Pixels { work, phases, rays } => {
+            let (hmd, pass) = pixel_pass(work.as_ref(), gbuffer, progress);
+            let mut phases = phases;
+            work.record_phase(&mut phases, pass.seconds);
+            let pixel_rays = work.casts_rays().then_some(RayCount {
+                cast: pass.tally.rays,
+                escaped: pass.tally.escaped,
+                seconds: pass.seconds,
+            });
+            Estimate {
+                hmd,
+                rays: rays.or(pixel_rays),
+                phases,
+                details: work.details(&pass),
+            }
+        }
+    })
+}
+
+/// The driver's loop over the estimator's pixels: rows in parallel, one worker (with its
+/// scratch) per rayon job, NaN for background, holes counted. The image does not depend on
+/// how rows are split among threads.
+fn pixel_pass(work: &dyn PixelWork, gbuffer: &GBuffer, progress: &dyn Progress) -> (Vec<f32>, PixelPass) {
+    let start = Instant::now();
+    let width = gbuffer.width as usize;
+    let mut hmd = vec![f32::NAN; gbuffer.points.len()];
+    progress.start(work.label(), gbuffer.height as u64);
+    let tally = hmd
+        .par_chunks_mut(width)
+        .zip(gbuffer.points.par_chunks(width))
+        .enumerate()
+        .map_init(
+            || work.worker(),
+            |worker, (row, (out, points))| {
+                let mut tally = Tally::default();
+                for (x, (h, point)) in out.iter_mut().zip(points).enumerate() {
+                    if let Some(hit) = point {
+                        *h = worker.pixel(hit, (row * width + x) as u64, &mut tally);
+                        tally.holes += h.is_nan() as u64;
+                    }
+                }
+                progress.advance(1);
+                tally
+            },
+        )
+        .reduce(Tally::default, |a, b| a + b);
+    progress.finish();
+    let pass = PixelPass {
+        tally,
+        pixels: gbuffer.surface_pixels(),
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    (hmd, pass)
 }
 
 /// Each pixel's first hit along its camera ray (SPEC §2), normal flipped to face the camera.

@@ -9,7 +9,9 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3};
 
 /// The direction weighting of SPEC §1.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
 pub enum Weighting {
     /// pdf `cos θ / π`: what final gathering and diffuse photon paths sample.
     #[default]
@@ -19,6 +21,7 @@ pub enum Weighting {
 }
 
 impl Weighting {
+    /// The name the CLI and the report use.
     pub fn name(self) -> &'static str {
         match self {
             Weighting::Cosine => "cosine",

@@ -12,6 +12,7 @@ use hmdist::image::HmdImage;
 use hmdist::metrics::f_diff;
 use hmdist::progress::Silent;
 use hmdist::render::{render, RenderOptions, Rendered};
+use hmdist::report::RenderReport;
 use hmdist::sampling::Weighting;
 use hmdist::scene::procedural::validation;
 use hmdist::scene::{Camera, Mesh, Scene};
@@ -23,7 +24,7 @@ fn try_cubemap(scene: &Scene, size: u32, rays: u32, resolution: u32, backend: Ba
         height: size,
         ..RenderOptions::default()
     };
-    render(scene, &estimator as &dyn Estimator, &options, 0.0, &Silent)
+    render(scene, &estimator as &dyn Estimator, &options, &Silent)
 }
 
 fn cubemap(
@@ -32,7 +33,7 @@ fn cubemap(
     rays: u32,
     resolution: u32,
     backend: Backend,
-) -> (HmdImage, serde_json::Value) {
+) -> (HmdImage, RenderReport) {
     let rendered = try_cubemap(scene, size, rays, resolution, backend).unwrap();
     (rendered.image, rendered.report)
 }
@@ -81,7 +82,7 @@ fn planes_perpendicular_to_the_face_axes_give_exact_texel_distances() {
             "R = {resolution}: H = {} (gather {}), |Δ|/H = {error:e}",
             cube.data[0], gathered.data[0]
         );
-        assert_eq!(report["escaped_rays"], 0);
+        assert_eq!(report.escaped_rays, Some(0));
         assert!(error < 1e-5, "R = {resolution}: relative difference {error}");
     }
 }
@@ -91,7 +92,7 @@ fn inside_a_closed_sphere_the_cube_map_gives_the_radius() {
     let r = validation::SPHERE_RADIUS;
     let scene = validation::sphere(r, 7);
     let (image, report) = cubemap(&scene, 32, 1024, 64, Backend::Cpu);
-    assert_eq!(report["escaped_rays"], 0);
+    assert_eq!(report.escaped_rays, Some(0));
     let mean = image.data.iter().map(|&h| r as f64 / h as f64).sum::<f64>() / image.data.len() as f64;
     println!("cubemap R = 64: mean R/H = {mean:.5}");
     assert!((mean - 1.0).abs() < 0.01, "mean R/H = {mean}");
@@ -148,7 +149,7 @@ fn open_scenes_count_directions_that_see_nothing_as_one_over_d_zero() {
     let (open, report) = cubemap(&floor, 1, 256, 64, Backend::Cpu);
     let (gathered, _) = common::gather(&floor, 1, 1, 256, Weighting::Cosine, None);
     assert_eq!((open.data[0], gathered.data[0]), (f32::INFINITY, f32::INFINITY));
-    assert_eq!(report["escaped_rays"], report["rays_cast"]);
+    assert_eq!(report.escaped_rays, report.rays_cast);
 }
 
 #[test]
@@ -161,9 +162,10 @@ fn gpu_backend_gives_exact_distances_and_agrees_with_cpu_on_cube() {
     let Some(exact) = gpu_or_skip(test, try_cubemap(&box_scene, 1, 4096, 16, Backend::Gpu)) else {
         return;
     };
-    println!("adapter: {}", exact.report["adapter"]);
-    assert_eq!(exact.report["backend"], "gpu");
-    assert_eq!(exact.report["escaped_lookups"], 0, "the box is closed");
+    let details = exact.report.details.cubemap.as_ref().expect("cube-map details");
+    println!("adapter: {:?}", details.adapter);
+    assert_eq!(details.backend, "gpu");
+    assert_eq!(details.escaped_lookups, 0, "the box is closed");
     let (gathered, _) = common::gather(&box_scene, 1, 1, 4096, Weighting::Cosine, None);
     let error = relative_difference(&exact.image, &gathered);
     println!(

@@ -4,6 +4,7 @@ mod common;
 
 use glam::Vec3;
 use hmdist::accel::{Accel, BuildQuality};
+use hmdist::error::Error;
 use hmdist::estimators::photon::{
     trace_photons, PathRules, PhotonMethod, PhotonParams, PhotonSource, SourceKind, TracedPhoton,
 };
@@ -12,6 +13,7 @@ use hmdist::image::HmdImage;
 use hmdist::metrics::f_diff;
 use hmdist::progress::Silent;
 use hmdist::render::{primary_hits, render, RenderOptions, DEFAULT_SEED};
+use hmdist::report::RenderReport;
 use hmdist::sampling::Weighting;
 use hmdist::scene::procedural::validation;
 use hmdist::scene::Scene;
@@ -22,7 +24,7 @@ fn photon_image(
     params: PhotonParams,
     size: u32,
     threads: Option<usize>,
-) -> (HmdImage, serde_json::Value) {
+) -> (HmdImage, RenderReport) {
     let estimator = PhotonEstimator::new(method, params).unwrap();
     let options = RenderOptions {
         width: size,
@@ -30,7 +32,7 @@ fn photon_image(
         threads,
         ..RenderOptions::default()
     };
-    let rendered = render(scene, &estimator as &dyn Estimator, &options, 0.0, &Silent).unwrap();
+    let rendered = render(scene, &estimator as &dyn Estimator, &options, &Silent).unwrap();
     (rendered.image, rendered.report)
 }
 
@@ -47,7 +49,7 @@ fn inside_a_closed_sphere_both_methods_give_the_radius_from_light_and_from_camer
                 ..PhotonParams::default()
             };
             let (image, report) = photon_image(&scene, method, params, 32, None);
-            assert_eq!(report["holes"], 0);
+            assert_eq!(report.details.photon.as_ref().unwrap().holes, 0);
             let mean = image.data.iter().map(|&h| r as f64 / h as f64).sum::<f64>() / image.data.len() as f64;
             println!("{} from {}: mean R/H = {mean:.4}", method.name(), source.name());
             assert!(
@@ -214,22 +216,27 @@ fn same_photon_image_with_1_and_2_threads() {
 #[test]
 fn bad_photon_parameters_are_refused() {
     let ok = PhotonParams::default();
+    // Refused as a bad value of the parameter called `what`.
     let refused = |p: PhotonParams, what: &str| {
         let e = PhotonEstimator::new(PhotonMethod::NextHitPoint, p)
             .err()
-            .expect("refused")
-            .to_string();
-        assert!(e.contains(what), "{e}");
+            .expect("refused");
+        assert!(
+            matches!(&e, Error::Parameter { name: Some(n), .. } if *n == what),
+            "{e}"
+        );
+        e.to_string()
     };
-    refused(PhotonParams { photons: 0, ..ok }, "--photons");
-    refused(PhotonParams { gather: 0, ..ok }, "--gather");
-    refused(
+    refused(PhotonParams { photons: 0, ..ok }, "photons");
+    refused(PhotonParams { gather: 0, ..ok }, "gather");
+    let e = refused(
         PhotonParams {
             photons: usize::MAX / 64,
             ..ok
         },
-        "memory",
+        "photons",
     );
+    assert!(e.contains("memory"), "{e}");
     refused(
         PhotonParams {
             rules: PathRules {
@@ -238,7 +245,7 @@ fn bad_photon_parameters_are_refused() {
             },
             ..ok
         },
-        "--absorption",
+        "absorption",
     );
     // No spot light: refused when the estimate starts.
     let slab = validation::slab(1.0, 10.0);
@@ -249,9 +256,18 @@ fn bad_photon_parameters_are_refused() {
         height: 4,
         ..RenderOptions::default()
     };
-    let e = render(&slab, &estimator, &options, 0.0, &Silent)
+    let e = render(&slab, &estimator, &options, &Silent)
         .err()
-        .expect("refused")
-        .to_string();
-    assert!(e.contains("no spot light"), "{e}");
+        .expect("refused");
+    assert!(
+        matches!(
+            &e,
+            Error::Parameter {
+                name: Some("source"),
+                ..
+            }
+        ),
+        "{e}"
+    );
+    assert!(e.to_string().contains("no spot light"), "{e}");
 }

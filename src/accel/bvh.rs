@@ -28,17 +28,30 @@ use crate::scene::Mesh;
 
 /// BVH build presets: build time against trace speed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum BuildQuality {
-    /// Our binned SAH builder ([`super::sah`]), parallel: `cube` in 0.03 s and `hall` in
-    /// 0.24 s on 2 cores, tracing 3–8 % slower than `High`.
-    Fast,
-    /// obvhs `very_slow_build` (spatial splits, whole-tree reinsertion): the fastest tracing,
-    /// for about 4 µs per triangle on one core (`hall`: 2.6 s).
-    High,
     /// `High` when the work to come casts at least [`AUTO_RAYS_PER_TRIANGLE`] rays per
     /// triangle, else `Fast` ([`BuildQuality::resolve`]); `High` where the work is unknown.
     #[default]
+    #[cfg_attr(
+        feature = "cli",
+        value(help = "high when the render casts at least 500 rays per triangle, else fast")
+    )]
     Auto,
+    /// Our binned SAH builder (`sah.rs`), parallel: `cube` in 0.03 s and `hall` in 0.24 s on
+    /// 2 cores, tracing 3–8 % slower than `High`.
+    #[cfg_attr(
+        feature = "cli",
+        value(help = "Binned SAH, parallel: builds about 10x faster than high, traces 3-8% slower")
+    )]
+    Fast,
+    /// obvhs `very_slow_build` (spatial splits, whole-tree reinsertion): the fastest tracing,
+    /// for about 4 µs per triangle on one core (`hall`: 2.6 s).
+    #[cfg_attr(
+        feature = "cli",
+        value(help = "Spatial splits and whole-tree reinsertion: the fastest tracing")
+    )]
+    High,
 }
 
 /// Where [`BuildQuality::Auto`] switches to `High`. Measured break-even: on `hall` the high

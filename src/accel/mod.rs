@@ -22,17 +22,17 @@
 //! nearest child first ([`traverse`]) by SIMD kernels chosen at run time ([`kernel`]).
 //! Distances are in scene units; directions must be unit length for `t` to be a distance.
 
-pub mod bvh;
-pub mod float_error;
-pub mod kernel;
+mod bvh;
+pub(crate) mod float_error;
+mod kernel;
 mod sah;
-pub mod traverse;
-pub mod triangle;
-pub mod wide;
+mod traverse;
+mod triangle;
+mod wide;
 
 use glam::Vec3;
 
-pub use bvh::{Accel, BuildQuality};
+pub use bvh::{Accel, BuildQuality, AUTO_RAYS_PER_TRIANGLE};
 pub use float_error::offset_ray_origin;
 pub use kernel::Kernel;
 pub use traverse::TraversalStats;

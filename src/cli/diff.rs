@@ -60,9 +60,16 @@ fn from_sidecar(exr: &Path) -> Result<(f32, f32)> {
             format!("cannot read the sidecar for l_diag ({e}): pass --scene"),
         )
     })?;
-    let report: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| Error::file(&json, format!("not JSON: {e}")))?;
-    let number = |key: &str| report[key].as_f64().map(|v| v as f32);
-    let l_diag = number("l_diag").ok_or_else(|| Error::file(&json, "has no 'l_diag': pass --scene"))?;
-    Ok((l_diag, number("display_scale").unwrap_or(2.0 / l_diag)))
+    /// The two keys of the report that `diff` reads.
+    #[derive(serde::Deserialize)]
+    struct Sidecar {
+        l_diag: Option<f32>,
+        display_scale: Option<f32>,
+    }
+    let sidecar: Sidecar =
+        serde_json::from_str(&text).map_err(|e| Error::file(&json, format!("not a report: {e}")))?;
+    let l_diag = sidecar
+        .l_diag
+        .ok_or_else(|| Error::file(&json, "has no 'l_diag': pass --scene"))?;
+    Ok((l_diag, sidecar.display_scale.unwrap_or(2.0 / l_diag)))
 }

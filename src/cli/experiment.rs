@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use clap::{Args, ValueEnum};
+use clap::Args;
 
 use hmdist::error::Result;
 use hmdist::experiments::{Preset, Runner, EXPERIMENTS};
@@ -19,8 +19,8 @@ pub struct ExperimentArgs {
     #[arg(long, default_value = "cube")]
     scene: String,
     /// quick: 48², reference 16384 rays, minutes; paper: 1024², reference 65536 rays, hours.
-    #[arg(long, value_enum, default_value_t = PresetArg::Quick)]
-    preset: PresetArg,
+    #[arg(long, value_enum, default_value_t = Preset::Quick)]
+    preset: Preset,
     /// Output folder: tables (CSV, Markdown), index.html, and the image cache that reruns reuse.
     #[arg(long, default_value = "experiments")]
     out: PathBuf,
@@ -29,17 +29,8 @@ pub struct ExperimentArgs {
     quiet: bool,
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-enum PresetArg {
-    Quick,
-    Paper,
-}
-
 pub fn run(args: ExperimentArgs) -> Result<()> {
-    let preset = match args.preset {
-        PresetArg::Quick => Preset::Quick,
-        PresetArg::Paper => Preset::Paper,
-    };
+    let preset = args.preset;
     if args.name != "all" && !EXPERIMENTS.contains(&args.name.as_str()) {
         return Err(hmdist::error::Error::parameter(format!(
             "unknown experiment '{}': expected all or one of {}",

@@ -1,15 +1,17 @@
-//! Command-line interface (SPEC §7). Every error is the user's: printed as one paragraph,
-//! exit status 2 (clap's own usage errors exit 2 as well).
+//! Command-line interface (SPEC §7, §8): flags become the library's configuration, results
+//! become files and one summary line. Every error is the user's: printed as one paragraph
+//! with parameters spelled as flags, exit status 2 (clap's own usage errors exit 2 as well).
 
 mod bar;
 mod diff;
 mod experiment;
+mod points;
 mod render;
 mod scene;
 
 use clap::{Parser, Subcommand};
 
-use hmdist::error::Result;
+use hmdist::error::{Error, Result};
 
 #[derive(Parser)]
 #[command(
@@ -30,6 +32,8 @@ pub struct Cli {
 enum Command {
     /// Render an HMD image: EXR (H per pixel), PNG (grey picture) and JSON (parameters, timings).
     Render(render::RenderArgs),
+    /// H at the points of a file (.npy or .csv rows x y z nx ny nz), by final gathering.
+    Points(points::PointsArgs),
     /// Compare two HMD images: f_diff (SPEC §4), RMSE, mean relative error, difference picture.
     Diff(diff::DiffArgs),
     /// Reproduce the paper's analysis on a scene: tables, notes and an HTML report.
@@ -42,8 +46,32 @@ enum Command {
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Render(args) => render::run(args),
+        Command::Points(args) => points::run(args),
         Command::Diff(args) => diff::run(args),
         Command::Experiment(args) => experiment::run(args),
         Command::Scene(command) => scene::run(command),
     }
+}
+
+/// The error as the person who typed the command should read it: library parameter names
+/// (`max_distance`) as the flags that set them (`--max-distance`).
+pub fn describe(error: &Error) -> String {
+    error.describe(|name| match name {
+        "width" | "height" => "--size".into(),
+        "bvh_quality" => "--bvh".into(),
+        name => format!("--{}", name.replace('_', "-")),
+    })
+}
+
+/// `WIDTHxHEIGHT`, e.g. `1024x1024`.
+fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT, e.g. 1024x1024"))?;
+    let parse = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("'{v}' in '{s}' is not a whole number"))
+    };
+    Ok((parse(w)?, parse(h)?))
 }

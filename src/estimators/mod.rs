@@ -1,10 +1,16 @@
-//! The HMD estimators of SPEC §3, behind one interface.
+//! The HMD estimators of SPEC §3, behind one interface, and the registry that names them.
 //!
 //! The render driver ([`crate::render`]) finds each pixel's surface point with a primary ray
-//! and hands the whole [`GBuffer`] to an [`Estimator`], which returns H per pixel. Estimators
-//! work on the whole image at once because some must (photon maps are built once per image;
-//! hemicubes are rasterised in batches on a GPU). Adding a fifth estimator is one new module
-//! implementing [`Estimator`].
+//! and owns the loop over pixels: rows in parallel, progress, ray and hole counts, timings
+//! (pbrt-v4's `ImageTileIntegrator` owns tiles in the same way). An [`Estimator`] says what
+//! happens at one pixel ([`PixelWorker`]), after an optional whole-image preparation (the
+//! photon map build) in [`Estimator::prepare`]. An estimator that must work on the whole
+//! image at once (the GPU hemicube, which rasterises batches of pixels) returns its finished
+//! [`Estimate`] from `prepare` instead.
+//!
+//! **Adding a fifth estimator** is one new module implementing [`Estimator`] (its pixel in a
+//! [`PixelWorker`]) plus one line in [`registry::METHODS`]; the CLI's `--method`, the
+//! experiments and the report pick it up from there.
 //!
 //! Conventions: distances in scene units; a pixel's normal faces the camera (surfaces are
 //! two-sided); H is `+inf` where every sample escaped and NaN for background pixels and holes.
@@ -13,35 +19,50 @@ pub mod cubemap;
 pub mod gather;
 mod harmonic;
 pub mod photon;
+pub mod registry;
 
 pub use cubemap::Cubemap;
 pub use gather::Gather;
 pub use harmonic::{DistanceClamp, HarmonicMean};
 pub use photon::PhotonEstimator;
+pub use registry::{MethodConfig, MethodEntry, METHODS};
 
 use crate::accel::{Accel, Hit};
 use crate::error::Result;
 use crate::progress::Progress;
+use crate::report::{Details, Parameters, PhaseSeconds};
 
 /// Each pixel's first surface hit, normal flipped to face the camera; `None` for background.
 pub struct GBuffer {
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
+    /// Row-major, row 0 at the top.
     pub points: Vec<Option<Hit>>,
 }
 
 impl GBuffer {
+    /// Pixels whose camera ray met nothing.
     pub fn background_pixels(&self) -> usize {
         self.points.iter().filter(|p| p.is_none()).count()
+    }
+
+    /// Pixels with a surface point.
+    pub fn surface_pixels(&self) -> u64 {
+        (self.points.len() - self.background_pixels()) as u64
     }
 }
 
 /// What every estimator may use besides the G-buffer.
 pub struct EstimateContext<'a> {
+    /// The scene's BVH.
     pub accel: &'a Accel,
+    /// The scene being rendered.
     pub scene: &'a crate::scene::Scene,
     /// Counter-based random numbers are keyed by this seed (SPEC §2).
     pub seed: u64,
+    /// How sample distances are clamped (SPEC §1).
     pub clamp: DistanceClamp,
 }
 
@@ -49,8 +70,9 @@ pub struct EstimateContext<'a> {
 /// `rays_cast`, `escaped_rays` and `mrays_per_s`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RayCount {
+    /// Rays cast.
     pub cast: u64,
-    /// Rays that hit nothing (within `--max-distance`, where the estimator's rays stop there).
+    /// Rays that hit nothing (within `max_distance`, where the estimator's rays stop there).
     pub escaped: u64,
     /// Seconds of the phase that cast them.
     pub seconds: f64,
@@ -58,39 +80,112 @@ pub struct RayCount {
 
 /// An estimator's output: H per pixel (row-major, row 0 at the top) and what it cost.
 pub struct Estimate {
+    /// H per pixel; NaN for background and holes.
     pub hmd: Vec<f32>,
     /// The rays cast; `None` for an estimator that casts none (the GPU cube map rasterises).
     pub rays: Option<RayCount>,
-    /// Named phases and their seconds, e.g. `("estimate", 1.2)`; written to the JSON sidecar.
-    pub phases: Vec<(&'static str, f64)>,
-    /// Method-specific figures for the JSON sidecar.
-    pub extra: serde_json::Map<String, serde_json::Value>,
+    /// The estimator's own phases, in the report's `seconds`.
+    pub phases: PhaseSeconds,
+    /// Method-specific figures for the report.
+    pub details: Details,
 }
 
-/// The fields of a JSON object literal, for [`Estimator::parameters`] and [`Estimate::extra`].
-pub(crate) fn fields(value: serde_json::Value) -> serde_json::Map<String, serde_json::Value> {
-    match value {
-        serde_json::Value::Object(map) => map,
-        _ => serde_json::Map::new(),
+/// What one pixel (or a whole pass) counted, summed by the driver.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Tally {
+    /// Rays cast.
+    pub rays: u64,
+    /// Rays that met nothing.
+    pub escaped: u64,
+    /// Cube-map lookups whose texel holds no surface within `max_distance`.
+    pub escaped_lookups: u64,
+    /// Surface pixels whose H is NaN (no sample: a photon-map hole). Counted by the driver.
+    pub holes: u64,
+}
+
+impl std::ops::Add for Tally {
+    type Output = Tally;
+    fn add(self, o: Tally) -> Tally {
+        Tally {
+            rays: self.rays + o.rays,
+            escaped: self.escaped + o.escaped,
+            escaped_lookups: self.escaped_lookups + o.escaped_lookups,
+            holes: self.holes + o.holes,
+        }
     }
+}
+
+/// What a pixel pass measured: the sums of its [`Tally`]s and its seconds.
+#[derive(Clone, Copy, Debug)]
+pub struct PixelPass {
+    /// Counts summed over every surface pixel.
+    pub tally: Tally,
+    /// Surface pixels evaluated.
+    pub pixels: u64,
+    /// Seconds of the pass.
+    pub seconds: f64,
+}
+
+/// The work of one estimator on one image, from [`Estimator::prepare`].
+pub enum Work<'a> {
+    /// Per-pixel work for the driver's loop, after a preparation that took `phases` and cast
+    /// `rays` (the photon trace; `None` where nothing was prepared).
+    Pixels {
+        /// Evaluates pixels.
+        work: Box<dyn PixelWork + 'a>,
+        /// Seconds of the preparation's phases.
+        phases: PhaseSeconds,
+        /// Rays the preparation cast.
+        rays: Option<RayCount>,
+    },
+    /// The whole image, already estimated.
+    Done(Estimate),
+}
+
+/// An estimator's per-pixel work on one image, shared by the worker threads.
+pub trait PixelWork: Sync {
+    /// The progress bar's label for the pixel pass.
+    fn label(&self) -> &'static str;
+
+    /// Whether the pixel pass casts the rays that the report counts (`gather` and the CPU
+    /// cube map do; the photon gather looks up a map instead).
+    fn casts_rays(&self) -> bool;
+
+    /// Records the pixel pass's seconds under the estimator's own phase name, if it has one.
+    fn record_phase(&self, _phases: &mut PhaseSeconds, _seconds: f64) {}
+
+    /// A worker for one thread, with its own scratch (the CPU cube map's texel cache).
+    fn worker(&self) -> Box<dyn PixelWorker + '_>;
+
+    /// The method-specific figures of the report, once every pixel is done.
+    fn details(&self, pass: &PixelPass) -> Details;
+}
+
+/// Evaluates pixels one at a time on one thread.
+pub trait PixelWorker {
+    /// H at the surface point `hit` of pixel `pixel` (row-major index, the random numbers'
+    /// key); adds what it cast to `tally`.
+    fn pixel(&mut self, hit: &Hit, pixel: u64, tally: &mut Tally) -> f32;
 }
 
 /// One way of computing H per pixel.
 pub trait Estimator: Sync {
-    /// The method's name as the CLI spells it (`gather`, `cubemap`, ...).
+    /// The method's name as the registry spells it (`gather`, `cubemap`, ...).
     fn method(&self) -> &'static str;
 
-    /// The method's parameters, for the JSON sidecar.
-    fn parameters(&self) -> serde_json::Map<String, serde_json::Value>;
+    /// The method's parameters, for the report.
+    fn parameters(&self) -> Parameters;
 
     /// About how many rays the estimator will cast for an image of `pixels` surface pixels
     /// (primary rays not included): chooses the BVH preset ([`crate::accel::BuildQuality`]).
     fn expected_rays(&self, pixels: u64) -> u64;
 
-    fn estimate(
-        &self,
-        context: &EstimateContext,
-        gbuffer: &GBuffer,
+    /// Prepares the image: whatever must be built for the whole image first, then the
+    /// per-pixel work for the driver (or the finished estimate).
+    fn prepare<'a>(
+        &'a self,
+        context: &'a EstimateContext<'a>,
+        gbuffer: &'a GBuffer,
         progress: &dyn Progress,
-    ) -> Result<Estimate>;
+    ) -> Result<Work<'a>>;
 }

@@ -67,10 +67,15 @@ fn ray_sweep(runner: &Runner) -> Result<RaySweep> {
         let cubemap = Cubemap::new(gather, p.cube_res, Backend::Cpu)?;
         let (g, g_report) = runner.image(&gather, 1)?;
         let (c, c_report) = runner.image(&cubemap, 1)?;
-        let seconds = |r: &serde_json::Value| r["seconds"]["estimate"].as_f64().unwrap_or(f64::NAN);
         let (fg, fc) = (f_diff(&reference, &g, l_diag)?, f_diff(&reference, &c, l_diag)?);
         excluded = excluded.max(fg.excluded).max(fc.excluded);
-        rows.push((rays, fg.value, fc.value, seconds(&g_report), seconds(&c_report)));
+        rows.push((
+            rays,
+            fg.value,
+            fc.value,
+            g_report.seconds.estimate,
+            c_report.seconds.estimate,
+        ));
         gathered.push(g);
     }
     Ok(RaySweep {
@@ -474,9 +479,9 @@ pub fn table3(runner: &Runner) -> Result<Section> {
                 let d = f_diff(&reference, &image, l_diag)?;
                 sums[m] += d.value;
                 figures.push((
-                    report["seconds"]["gather"].as_f64().unwrap_or(f64::NAN),
+                    report.seconds.phases.gather.unwrap_or(f64::NAN),
                     d.value,
-                    report["holes"].clone(),
+                    report.details.photon.map_or(0, |p| p.holes),
                 ));
                 grids[m].push(Some(Tile {
                     caption: format!("{}K K={k}", photons / 1000),
@@ -534,7 +539,7 @@ pub fn fig10(runner: &Runner) -> Result<Section> {
         table.push(vec![
             method.name().into(),
             format!("{:.4}", d.value),
-            report["holes"].to_string(),
+            report.details.photon.map_or(0, |p| p.holes).to_string(),
         ]);
         tiles.push(Some(Tile {
             caption: method.name().into(),

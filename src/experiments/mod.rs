@@ -12,20 +12,19 @@
 //! `table3` (with `fig14`, `fig15`), `fig10`, `table4`, `fig16_17`, `memory`.
 
 mod analysis;
-pub mod grid;
+mod grid;
 pub mod plot;
 mod report;
 pub mod table;
 
 use std::path::{Path, PathBuf};
 
-use serde_json::Value;
-
 use crate::error::{Error, Result};
 use crate::estimators::Estimator;
 use crate::image::{exr, write_atomically, HmdImage};
 use crate::progress::{Progress, Silent};
 use crate::render::{render, RenderOptions};
+use crate::report::RenderReport;
 use crate::scene::{stable_hash, Scene};
 pub use table::Table;
 
@@ -39,6 +38,7 @@ pub const REFERENCE_SEED: u64 = 1_000_003;
 
 /// How much work an experiment does.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Preset {
     /// Small images, a 16,384-ray reference, fewer points: minutes on 2 cores. What CI runs.
     Quick,
@@ -185,13 +185,13 @@ impl<'a> Runner<'a> {
 
     /// The image `estimator` renders at the preset's size with `seed`, from the cache when
     /// an earlier run made it.
-    pub fn image(&self, estimator: &dyn Estimator, seed: u64) -> Result<(HmdImage, Value)> {
+    pub fn image(&self, estimator: &dyn Estimator, seed: u64) -> Result<(HmdImage, RenderReport)> {
         let size = self.params.size;
+        let parameters = serde_json::to_string(&estimator.parameters()).expect("parameters serialise");
         let key = format!(
-            "{}|{}|{}|{size}x{size}|{seed}",
+            "{}|{}|{parameters}|{size}x{size}|{seed}",
             self.scene_key,
             estimator.method(),
-            Value::Object(estimator.parameters())
         );
         let stem = format!("{}-{:016x}", estimator.method(), stable_hash(key.as_bytes()));
         let (exr_path, json_path) = (
@@ -199,9 +199,9 @@ impl<'a> Runner<'a> {
             self.out.join("cache").join(format!("{stem}.json")),
         );
         if let (Ok(image), Ok(text)) = (exr::read(&exr_path), std::fs::read_to_string(&json_path)) {
-            if let Ok(report) = serde_json::from_str::<Value>(&text) {
+            if let Ok(report) = serde_json::from_str::<RenderReport>(&text) {
                 // The version is in the key; a report that says otherwise was not ours.
-                if report["hmdist_version"] == env!("CARGO_PKG_VERSION") {
+                if report.hmdist_version == env!("CARGO_PKG_VERSION") {
                     return Ok((image, report));
                 }
             }
@@ -212,11 +212,10 @@ impl<'a> Runner<'a> {
             seed,
             ..RenderOptions::default()
         };
-        let rendered = render(&self.scene, estimator, &options, 0.0, &Silent)?;
+        let rendered = render(&self.scene, estimator, &options, &Silent)?;
         exr::write(&rendered.image, &exr_path)?;
         // The JSON last: an image counts as cached only once both files are in place.
-        let text = serde_json::to_string_pretty(&rendered.report).expect("report serialises");
-        write_atomically(&json_path, text.as_bytes())?;
+        write_atomically(&json_path, rendered.report.to_json().as_bytes())?;
         self.progress.advance(1);
         Ok((rendered.image, rendered.report))
     }

@@ -7,11 +7,12 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
-use hmdist::error::Result;
+use hmdist::error::{DeviceErrorKind, Error, Result};
 use hmdist::estimators::Gather;
 use hmdist::image::HmdImage;
 use hmdist::progress::Silent;
 use hmdist::render::{render, RenderOptions, Rendered};
+use hmdist::report::RenderReport;
 use hmdist::sampling::Weighting;
 use hmdist::scene::{Camera, Mesh, Scene};
 
@@ -23,7 +24,7 @@ pub fn gather(
     rays: u32,
     weighting: Weighting,
     threads: Option<usize>,
-) -> (HmdImage, serde_json::Value) {
+) -> (HmdImage, RenderReport) {
     let estimator = Gather::new(rays, weighting).unwrap();
     let options = RenderOptions {
         width,
@@ -31,7 +32,7 @@ pub fn gather(
         threads,
         ..RenderOptions::default()
     };
-    let rendered = render(scene, &estimator, &options, 0.0, &Silent).unwrap();
+    let rendered = render(scene, &estimator, &options, &Silent).unwrap();
     (rendered.image, rendered.report)
 }
 
@@ -86,7 +87,15 @@ pub const REQUIRE_GPU: &str = "HMDIST_REQUIRE_GPU";
 pub fn gpu_or_skip(test: &str, result: Result<Rendered>) -> Option<Rendered> {
     match result {
         Ok(rendered) => Some(rendered),
-        Err(e) if gpu_missing(test, &e.to_string()) => None,
+        Err(
+            e @ Error::Device {
+                kind: DeviceErrorKind::NoAdapter,
+                ..
+            },
+        ) => {
+            assert!(gpu_missing(test, &e.to_string()), "{e}");
+            None
+        }
         Err(e) => panic!("{test}: the GPU backend must run here: {e}"),
     }
 }

@@ -5,131 +5,96 @@
 //! depend on which others are filled), so the cost is one ray per distinct texel looked up,
 //! not `12R²` per pixel. The near plane at `d_min` is the clamp of every distance at `d_min`.
 
-use std::sync::atomic::{AtomicU64, Ordering};
-
-use rayon::prelude::*;
-
-use super::hemicube::Hemicube;
 use super::Cubemap;
 use crate::accel::{Hit, RayCaster};
-use crate::estimators::{EstimateContext, GBuffer, HarmonicMean};
-use crate::progress::Progress;
-use crate::sampling::{strata, Frame};
+use crate::estimators::{EstimateContext, HarmonicMean, PixelPass, PixelWork, PixelWorker, Tally};
+use crate::report::{CubemapDetails, Details, PhaseSeconds};
+use crate::sampling::Frame;
+
+/// The CPU cube map on one image.
+pub(super) struct CpuPixels<'a> {
+    pub cubemap: &'a Cubemap,
+    pub context: &'a EstimateContext<'a>,
+}
+
+impl PixelWork for CpuPixels<'_> {
+    fn label(&self) -> &'static str {
+        "cube maps"
+    }
+
+    fn casts_rays(&self) -> bool {
+        true
+    }
+
+    fn record_phase(&self, phases: &mut PhaseSeconds, seconds: f64) {
+        // A texel is filled at its first lookup: build and lookup interleave.
+        phases.cubemap_build_and_lookup = Some(seconds);
+    }
+
+    fn worker(&self) -> Box<dyn PixelWorker + '_> {
+        let texels = self.cubemap.hemicube.texel_count();
+        Box::new(TexelCache {
+            pixels: self,
+            depth: vec![0.0; texels],
+            stamp: vec![0; texels],
+            current: 0,
+        })
+    }
+
+    fn details(&self, pass: &PixelPass) -> Details {
+        Details {
+            cubemap: Some(CubemapDetails {
+                backend: "cpu".into(),
+                adapter: None,
+                // The CPU fills only the texels that are looked up, one ray each.
+                texels_rasterised: pass.tally.rays,
+                texels_per_hemicube: self.cubemap.hemicube.texel_count() as u64,
+                lookups: pass.pixels * self.cubemap.gather.rays_per_point() as u64,
+                escaped_lookups: pass.tally.escaped_lookups,
+            }),
+            ..Details::default()
+        }
+    }
+}
 
 /// Per-worker texel cache: depth per texel, valid where `stamp` equals the current pixel's.
-struct TexelCache {
+struct TexelCache<'a> {
+    pixels: &'a CpuPixels<'a>,
     depth: Vec<f32>,
     stamp: Vec<u32>,
     current: u32,
 }
 
-/// What the CPU backend measured over the whole image.
-pub struct CpuEstimate {
-    pub hmd: Vec<f32>,
-    /// Rays cast to fill texels: one per texel looked up, per pixel.
-    pub texel_rays: u64,
-    /// Texel rays that met nothing.
-    pub escaped_texel_rays: u64,
-    /// Lookups (pixel, direction) whose texel holds no surface within `--max-distance`.
-    pub escaped_lookups: u64,
-}
-
-/// Counts of one pixel or row, summed into a [`CpuEstimate`].
-#[derive(Clone, Copy, Default)]
-struct Counts {
-    texel_rays: u64,
-    escaped_texel_rays: u64,
-    escaped_lookups: u64,
-}
-
-impl std::ops::AddAssign for Counts {
-    fn add_assign(&mut self, other: Counts) {
-        self.texel_rays += other.texel_rays;
-        self.escaped_texel_rays += other.escaped_texel_rays;
-        self.escaped_lookups += other.escaped_lookups;
-    }
-}
-
-/// H per pixel and the counts of [`CpuEstimate`].
-pub fn estimate(
-    cubemap: &Cubemap,
-    context: &EstimateContext,
-    gbuffer: &GBuffer,
-    progress: &dyn Progress,
-) -> CpuEstimate {
-    let width = gbuffer.width as usize;
-    let [cast, escaped, escaped_lookups] = [(); 3].map(|_| AtomicU64::new(0));
-    let texels = cubemap.hemicube.texel_count();
-    let mut hmd = vec![f32::NAN; gbuffer.points.len()];
-    progress.start("cube maps", gbuffer.height as u64);
-    hmd.par_chunks_mut(width)
-        .zip(gbuffer.points.par_chunks(width))
-        .enumerate()
-        .for_each_init(
-            || TexelCache {
-                depth: vec![0.0; texels],
-                stamp: vec![0; texels],
-                current: 0,
-            },
-            |cache, (row, (out, points))| {
-                let mut counts = Counts::default();
-                for (x, (h, point)) in out.iter_mut().zip(points).enumerate() {
-                    let Some(hit) = point else { continue };
-                    let pixel = (row * width + x) as u64;
-                    let (value, c) = pixel_estimate(cubemap, context, cache, hit, pixel);
-                    *h = value;
-                    counts += c;
-                }
-                cast.fetch_add(counts.texel_rays, Ordering::Relaxed);
-                escaped.fetch_add(counts.escaped_texel_rays, Ordering::Relaxed);
-                escaped_lookups.fetch_add(counts.escaped_lookups, Ordering::Relaxed);
-                progress.advance(1);
-            },
-        );
-    progress.finish();
-    CpuEstimate {
-        hmd,
-        texel_rays: cast.into_inner(),
-        escaped_texel_rays: escaped.into_inner(),
-        escaped_lookups: escaped_lookups.into_inner(),
-    }
-}
-
-/// H at one pixel from its (lazily filled) hemicube, and its counts.
-fn pixel_estimate(
-    cubemap: &Cubemap,
-    context: &EstimateContext,
-    cache: &mut TexelCache,
-    hit: &Hit,
-    pixel: u64,
-) -> (f32, Counts) {
-    cache.current = cache.current.wrapping_add(1);
-    if cache.current == 0 {
-        cache.stamp.fill(0);
-        cache.current = 1;
-    }
-    let hemicube: Hemicube = cubemap.hemicube;
-    let origin = hit.spawn_origin(hit.normal);
-    let frame = Frame::from_normal(hit.normal);
-    let grid = strata(cubemap.gather.rays);
-    let mut counts = Counts::default();
-    let mut mean = HarmonicMean::default();
-    for j in 0..cubemap.gather.rays {
-        let w = cubemap.gather.local_direction(grid, context.seed, pixel, j);
-        let (_, texel, along) = hemicube.lookup(w);
-        if cache.stamp[texel] != cache.current {
-            let (face, c) = hemicube.texel_direction(texel);
-            let t = context
-                .accel
-                .hit_distance(origin, frame.to_world(c), f32::INFINITY, Some(hit.triangle));
-            counts.texel_rays += 1;
-            counts.escaped_texel_rays += t.is_infinite() as u64;
-            cache.depth[texel] = t * c.dot(face.axis());
-            cache.stamp[texel] = cache.current;
+impl PixelWorker for TexelCache<'_> {
+    /// H at one pixel from its (lazily filled) hemicube.
+    fn pixel(&mut self, hit: &Hit, pixel: u64, tally: &mut Tally) -> f32 {
+        let (cubemap, context) = (self.pixels.cubemap, self.pixels.context);
+        self.current = self.current.wrapping_add(1);
+        if self.current == 0 {
+            self.stamp.fill(0);
+            self.current = 1;
         }
-        let d = cache.depth[texel] / along;
-        counts.escaped_lookups += (d > context.clamp.max || d.is_infinite()) as u64;
-        mean.add(d, context.clamp);
+        let hemicube = cubemap.hemicube;
+        let origin = hit.spawn_origin(hit.normal);
+        let frame = Frame::from_normal(hit.normal);
+        let mut mean = HarmonicMean::default();
+        for w in cubemap.gather.directions(context.seed, pixel) {
+            let (_, texel, along) = hemicube.lookup(w);
+            if self.stamp[texel] != self.current {
+                let (face, c) = hemicube.texel_direction(texel);
+                let t =
+                    context
+                        .accel
+                        .hit_distance(origin, frame.to_world(c), f32::INFINITY, Some(hit.triangle));
+                tally.rays += 1;
+                tally.escaped += t.is_infinite() as u64;
+                self.depth[texel] = t * c.dot(face.axis());
+                self.stamp[texel] = self.current;
+            }
+            let d = self.depth[texel] / along;
+            tally.escaped_lookups += (d > context.clamp.max || d.is_infinite()) as u64;
+            mean.add(d, context.clamp);
+        }
+        mean.value()
     }
-    (mean.value(), counts)
 }

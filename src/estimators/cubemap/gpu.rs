@@ -14,9 +14,10 @@ use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
 use super::Cubemap;
-use crate::error::{Error, Result};
-use crate::estimators::{EstimateContext, GBuffer};
+use crate::error::{DeviceErrorKind, Error, Result};
+use crate::estimators::{Estimate, EstimateContext, GBuffer};
 use crate::progress::Progress;
+use crate::report::{CubemapDetails, Details, PhaseSeconds};
 use crate::sampling::{strata, Frame, Weighting};
 
 /// Largest atlas side we ask for (the device limit may be lower).
@@ -59,14 +60,21 @@ struct LookupResult {
     escaped: u32,
 }
 
+/// One batch's results per hemicube, and the seconds of each half.
+struct Batch {
+    values: Vec<LookupResult>,
+    raster_seconds: f64,
+    lookup_seconds: f64,
+}
+
 /// What the GPU backend measured over the whole image.
-pub struct GpuEstimate {
-    pub hmd: Vec<f32>,
-    pub texels_rasterised: u64,
+struct GpuEstimate {
+    hmd: Vec<f32>,
+    texels_rasterised: u64,
     /// Lookups (pixel, direction) whose texel holds no surface within `--max-distance`.
-    pub escaped_lookups: u64,
-    pub raster_seconds: f64,
-    pub lookup_seconds: f64,
+    escaped_lookups: u64,
+    raster_seconds: f64,
+    lookup_seconds: f64,
 }
 
 /// A device that can run the hemicube pipeline, and what it is called.
@@ -81,7 +89,7 @@ impl Gpu {
     /// The first Vulkan, Metal or DX12 adapter with clip distances, if any. (Not GL: wgpu's GL
     /// fallback cannot render to R32Float.) A software rasteriser (Mesa's lavapipe) is taken
     /// only when `allow_software`.
-    pub fn open(allow_software: bool) -> std::result::Result<Gpu, String> {
+    pub fn open(allow_software: bool) -> Result<Gpu> {
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
             backends: wgpu::Backends::VULKAN | wgpu::Backends::METAL | wgpu::Backends::DX12,
             ..wgpu::InstanceDescriptor::new_without_display_handle_from_env()
@@ -92,13 +100,18 @@ impl Gpu {
             compatible_surface: None,
             ..Default::default()
         }))
-        .map_err(|e| format!("no Vulkan, Metal or DX12 adapter ({e})"))?;
+        .map_err(|e| {
+            let message = format!("no Vulkan, Metal or DX12 adapter ({e})");
+            Error::device(DeviceErrorKind::NoAdapter, message)
+        })?;
         let info = adapter.get_info();
         if info.device_type == wgpu::DeviceType::Cpu && !allow_software {
-            return Err(format!("adapter '{}' is a software rasteriser", info.name));
+            let message = format!("adapter '{}' is a software rasteriser", info.name);
+            return Err(Error::device(DeviceErrorKind::NoAdapter, message));
         }
         if !adapter.features().contains(wgpu::Features::CLIP_DISTANCES) {
-            return Err(format!("adapter '{}' lacks clip distances", info.name));
+            let message = format!("adapter '{}' lacks clip distances", info.name);
+            return Err(Error::device(DeviceErrorKind::Unsupported, message));
         }
         let limits = adapter.limits();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
@@ -107,7 +120,10 @@ impl Gpu {
             required_limits: limits.clone(),
             ..Default::default()
         }))
-        .map_err(|e| format!("adapter '{}' refused a device: {e}", info.name))?;
+        .map_err(|e| {
+            let message = format!("adapter '{}' refused a device: {e}", info.name);
+            Error::device(DeviceErrorKind::Failed, message)
+        })?;
         Ok(Gpu {
             device,
             queue,
@@ -117,8 +133,41 @@ impl Gpu {
     }
 }
 
-/// H per pixel, with what it took: see [`GpuEstimate`].
+/// The whole image: H per pixel and what it took. Rasterisation casts no rays, so the
+/// report's `rays_cast`, `escaped_rays` and `mrays_per_s` are null.
 pub fn estimate(
+    gpu: &Gpu,
+    cubemap: &Cubemap,
+    context: &EstimateContext,
+    gbuffer: &GBuffer,
+    progress: &dyn Progress,
+) -> Result<Estimate> {
+    let result = rasterise(gpu, cubemap, context, gbuffer, progress)?;
+    let lookups = gbuffer.surface_pixels() * cubemap.gather.rays_per_point() as u64;
+    Ok(Estimate {
+        hmd: result.hmd,
+        rays: None,
+        phases: PhaseSeconds {
+            cubemap_build: Some(result.raster_seconds),
+            cubemap_lookup: Some(result.lookup_seconds),
+            ..PhaseSeconds::default()
+        },
+        details: Details {
+            cubemap: Some(CubemapDetails {
+                backend: "gpu".into(),
+                adapter: Some(gpu.adapter_name.clone()),
+                texels_rasterised: result.texels_rasterised,
+                texels_per_hemicube: cubemap.hemicube.texel_count() as u64,
+                lookups,
+                escaped_lookups: result.escaped_lookups,
+            }),
+            ..Details::default()
+        },
+    })
+}
+
+/// H per pixel, with what it took: see [`GpuEstimate`].
+fn rasterise(
     gpu: &Gpu,
     cubemap: &Cubemap,
     context: &EstimateContext,
@@ -129,9 +178,8 @@ pub fn estimate(
     let side = MAX_ATLAS.min(gpu.max_texture);
     let (cols, rows) = (side / (2 * r), side / (6 * r));
     if cols == 0 || rows == 0 {
-        return Err(Error::parameter(format!(
-            "--cube-res {r} does not fit the GPU's largest texture ({side} texels)"
-        )));
+        let message = format!("cube_res {r} does not fit the GPU's largest texture ({side} texels)");
+        return Err(Error::device(DeviceErrorKind::Unsupported, message));
     }
     let capacity = (cols * rows) as usize;
     let atlas_size = (cols * 2 * r, rows * 6 * r);
@@ -147,9 +195,12 @@ pub fn estimate(
         atlas_size,
         (cols, capacity),
     );
-    for scope in [validation, out_of_memory] {
+    for (scope, kind) in [
+        (validation, DeviceErrorKind::Failed),
+        (out_of_memory, DeviceErrorKind::OutOfMemory),
+    ] {
         if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(Error::parameter(format!("the GPU backend failed: {e}")));
+            return Err(Error::device(kind, format!("the cube-map pipeline failed: {e}")));
         }
     }
     result
@@ -189,17 +240,17 @@ fn estimate_batches(
         })
         .collect();
 
-    let (a, b) = strata(cubemap.gather.rays);
+    let (a, b) = strata(cubemap.gather.rays_per_point());
     let clamp = context.clamp;
     let base = Params {
         atlas_size: [atlas_size.0 as f32, atlas_size.1 as f32],
         atlas_cols: cols,
         resolution: r,
         count: 0,
-        rays: cubemap.gather.rays,
+        rays: cubemap.gather.rays_per_point(),
         grid_a: a,
         grid_b: b,
-        weighting: (cubemap.gather.weighting == Weighting::Uniform) as u32,
+        weighting: (cubemap.gather.weighting() == Weighting::Uniform) as u32,
         has_max: clamp.max.is_finite() as u32,
         seed: [context.seed as u32, (context.seed >> 32) as u32],
         near: clamp.min,
@@ -217,10 +268,10 @@ fn estimate_batches(
             count: batch.len() as u32,
             ..base
         };
-        let (values, t_raster, t_lookup) = pipeline.run(gpu, &params, &cubes)?;
-        raster += t_raster;
-        lookup += t_lookup;
-        for ((i, _), result) in batch.iter().zip(values) {
+        let done = pipeline.run(gpu, &params, &cubes)?;
+        raster += done.raster_seconds;
+        lookup += done.lookup_seconds;
+        for ((i, _), result) in batch.iter().zip(done.values) {
             hmd[*i] = result.hmd;
             escaped += result.escaped as u64;
         }
@@ -399,7 +450,7 @@ impl Pipeline {
 
     /// Rasterises and looks up one batch; the result per hemicube and the seconds of each
     /// half.
-    fn run(&self, gpu: &Gpu, params: &Params, cubes: &[Cube]) -> Result<(Vec<LookupResult>, f64, f64)> {
+    fn run(&self, gpu: &Gpu, params: &Params, cubes: &[Cube]) -> Result<Batch> {
         let device = &gpu.device;
         let init = |label, contents: &[u8], usage| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -520,12 +571,15 @@ impl Pipeline {
         let values: Vec<LookupResult> = match slice.get_mapped_range() {
             Ok(view) => bytemuck::cast_slice(&view).to_vec(),
             Err(e) => {
-                return Err(Error::parameter(format!(
-                    "cannot read the GPU's results back: {e}"
-                )))
+                let message = format!("cannot read the results back: {e}");
+                return Err(Error::device(DeviceErrorKind::Readback, message));
             }
         };
         readback.unmap();
-        Ok((values, raster, start.elapsed().as_secs_f64()))
+        Ok(Batch {
+            values,
+            raster_seconds: raster,
+            lookup_seconds: start.elapsed().as_secs_f64(),
+        })
     }
 }

@@ -10,16 +10,14 @@
 //! hardware GPU where there is one, else the CPU.
 
 mod cpu;
+#[cfg(feature = "gpu")]
 mod gpu;
 pub mod hemicube;
 
-use std::time::Instant;
-
-use serde_json::json;
-
-use super::{Estimate, EstimateContext, Estimator, GBuffer, Gather, RayCount};
+use super::{EstimateContext, Estimator, GBuffer, Gather, Work};
 use crate::error::{Error, Result};
 use crate::progress::Progress;
+use crate::report::{CubemapParameters, Parameters};
 pub use hemicube::{Face, Hemicube};
 
 /// Default per-quadrant resolution `R` (paper: 64 and 128).
@@ -28,33 +26,57 @@ pub const DEFAULT_CUBE_RES: u32 = 64;
 pub const MAX_CUBE_RES: u32 = 1024;
 
 /// Which implementation builds the cube maps.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
 pub enum Backend {
-    Cpu,
-    Gpu,
-    /// The GPU where a hardware Vulkan, Metal or DX12 adapter exists, else the CPU (a
-    /// software rasteriser such as lavapipe is slower than the CPU backend).
+    /// gpu if a hardware adapter exists, else cpu (a software rasteriser such as lavapipe is
+    /// slower than the CPU backend).
+    #[default]
     Auto,
+    /// wgpu rasterisation (Vulkan, Metal or DX12).
+    Gpu,
+    /// Ray casting through each texel looked up.
+    Cpu,
 }
 
 /// The cube-map estimator: `gather`'s directions looked up in per-pixel hemicubes.
 pub struct Cubemap {
-    pub gather: Gather,
-    pub hemicube: Hemicube,
-    pub backend: Backend,
+    gather: Gather,
+    hemicube: Hemicube,
+    backend: Backend,
 }
 
 impl Cubemap {
+    /// `gather`'s directions looked up in hemicubes of per-quadrant resolution `resolution`
+    /// (1 to [`MAX_CUBE_RES`]), built by `backend`.
     pub fn new(gather: Gather, resolution: u32, backend: Backend) -> Result<Self> {
         if resolution == 0 || resolution > MAX_CUBE_RES {
-            return Err(Error::parameter(format!(
-                "--cube-res must be between 1 and {MAX_CUBE_RES}, not {resolution}"
-            )));
+            return Err(Error::invalid(
+                "cube_res",
+                format!("must be between 1 and {MAX_CUBE_RES}, not {resolution}"),
+            ));
         }
         Ok(Cubemap {
             gather,
             hemicube: Hemicube { resolution },
             backend,
+        })
+    }
+
+    /// The hemicube every pixel gets.
+    pub fn hemicube(&self) -> Hemicube {
+        self.hemicube
+    }
+
+    /// The GPU to rasterise with, or `None` for the CPU backend.
+    #[cfg(feature = "gpu")]
+    fn gpu(&self) -> Result<Option<gpu::Gpu>> {
+        Ok(match self.backend {
+            Backend::Cpu => None,
+            Backend::Gpu => Some(gpu::Gpu::open(true)?),
+            // A software rasteriser is slower than the CPU backend: auto wants real hardware.
+            Backend::Auto => gpu::Gpu::open(false).ok(),
         })
     }
 }
@@ -64,10 +86,13 @@ impl Estimator for Cubemap {
         "cubemap"
     }
 
-    fn parameters(&self) -> serde_json::Map<String, serde_json::Value> {
-        let mut p = self.gather.parameters();
-        p.insert("cube_res".into(), json!(self.hemicube.resolution));
-        p
+    fn parameters(&self) -> Parameters {
+        Parameters {
+            cubemap: Some(CubemapParameters {
+                cube_res: self.hemicube.resolution,
+            }),
+            ..self.gather.parameters()
+        }
     }
 
     fn expected_rays(&self, pixels: u64) -> u64 {
@@ -79,65 +104,31 @@ impl Estimator for Cubemap {
         }
     }
 
-    fn estimate(
-        &self,
-        context: &EstimateContext,
-        gbuffer: &GBuffer,
+    fn prepare<'a>(
+        &'a self,
+        context: &'a EstimateContext<'a>,
+        gbuffer: &'a GBuffer,
         progress: &dyn Progress,
-    ) -> Result<Estimate> {
-        let gpu = match self.backend {
-            Backend::Cpu => None,
-            Backend::Gpu => {
-                Some(gpu::Gpu::open(true).map_err(|e| Error::parameter(format!("--backend gpu: {e}")))?)
-            }
-            // A software rasteriser is slower than the CPU backend: auto wants real hardware.
-            Backend::Auto => gpu::Gpu::open(false).ok(),
-        };
-        let surface_pixels = (gbuffer.points.len() - gbuffer.background_pixels()) as u64;
-        let lookups = surface_pixels * self.gather.rays as u64;
-        let Some(gpu) = gpu else {
-            let start = Instant::now();
-            let cpu = cpu::estimate(self, context, gbuffer, progress);
-            let seconds = start.elapsed().as_secs_f64();
-            let extra = json!({
-                "backend": "cpu",
-                "adapter": serde_json::Value::Null,
-                // The CPU fills only the texels that are looked up, one ray each.
-                "texels_rasterised": cpu.texel_rays,
-                "texels_per_hemicube": self.hemicube.texel_count(),
-                "lookups": lookups,
-                "escaped_lookups": cpu.escaped_lookups,
-            });
-            return Ok(Estimate {
-                hmd: cpu.hmd,
-                rays: Some(RayCount {
-                    cast: cpu.texel_rays,
-                    escaped: cpu.escaped_texel_rays,
-                    seconds,
-                }),
-                // The CPU backend fills a texel at its first lookup: build and lookup interleave.
-                phases: vec![("cubemap_build_and_lookup", seconds)],
-                extra: crate::estimators::fields(extra),
-            });
-        };
-        let result = gpu::estimate(&gpu, self, context, gbuffer, progress)?;
-        let extra = json!({
-            "backend": "gpu",
-            "adapter": gpu.adapter_name,
-            "texels_rasterised": result.texels_rasterised,
-            "texels_per_hemicube": self.hemicube.texel_count(),
-            "lookups": lookups,
-            "escaped_lookups": result.escaped_lookups,
-        });
-        Ok(Estimate {
-            hmd: result.hmd,
-            // Rasterisation casts no rays: rays_cast, escaped_rays and mrays_per_s are null.
+    ) -> Result<Work<'a>> {
+        #[cfg(feature = "gpu")]
+        if let Some(gpu) = self.gpu()? {
+            return gpu::estimate(&gpu, self, context, gbuffer, progress).map(Work::Done);
+        }
+        #[cfg(not(feature = "gpu"))]
+        if self.backend == Backend::Gpu {
+            return Err(crate::error::Error::device(
+                crate::error::DeviceErrorKind::NoAdapter,
+                "this hmdist was built without the gpu feature: use the cpu backend",
+            ));
+        }
+        let _ = (gbuffer, progress);
+        Ok(Work::Pixels {
+            work: Box::new(cpu::CpuPixels {
+                cubemap: self,
+                context,
+            }),
+            phases: Default::default(),
             rays: None,
-            phases: vec![
-                ("cubemap_build", result.raster_seconds),
-                ("cubemap_lookup", result.lookup_seconds),
-            ],
-            extra: crate::estimators::fields(extra),
         })
     }
 }

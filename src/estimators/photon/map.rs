@@ -91,8 +91,9 @@ impl PhotonMap {
     /// Builds the map for `method` from traced photons.
     pub fn build(photons: &[TracedPhoton], method: PhotonMethod) -> Result<PhotonMap> {
         if photons.len() > u32::MAX as usize {
-            return Err(Error::parameter(
-                "a photon map holds at most 4,294,967,295 photons",
+            return Err(Error::invalid(
+                "photons",
+                "must be at most 4,294,967,295 in one map",
             ));
         }
         let positions: Vec<[f32; 3]> = photons.iter().map(|p| p.position.to_array()).collect();

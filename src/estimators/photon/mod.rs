@@ -13,12 +13,14 @@ use std::num::NonZero;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
-use rayon::prelude::*;
-use serde_json::json;
-
-use super::{Estimate, EstimateContext, Estimator, GBuffer, HarmonicMean, RayCount};
+use super::{
+    EstimateContext, Estimator, GBuffer, HarmonicMean, PixelPass, PixelWork, PixelWorker, RayCount, Tally,
+    Work,
+};
+use crate::accel::Hit;
 use crate::error::{Error, Result};
 use crate::progress::Progress;
+use crate::report::{Details, Parameters, PhaseSeconds, PhotonDetails, PhotonParameters};
 pub use map::{PhotonMap, PhotonMethod};
 pub use trace::{trace_photons, PathRules, PhotonSource, PhotonTrace, TracedPhoton};
 
@@ -33,14 +35,20 @@ pub const DEFAULT_ABSORPTION: f32 = 0.2;
 /// A gathered photon counts when `n_j · n` is at least this (same surface orientation).
 pub const NORMAL_FILTER_COS: f32 = 0.9;
 
-/// Where photon paths start, as the CLI names it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Where photon paths start.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
 pub enum SourceKind {
+    /// The scene's spot light.
+    #[default]
     Light,
+    /// The camera, through random image positions.
     Camera,
 }
 
 impl SourceKind {
+    /// The name the CLI and the report use.
     pub fn name(self) -> &'static str {
         match self {
             SourceKind::Light => "light",
@@ -79,32 +87,33 @@ impl Default for PhotonParams {
 
 /// Method I or II over a photon map built once per image.
 pub struct PhotonEstimator {
-    pub method: PhotonMethod,
-    pub params: PhotonParams,
+    method: PhotonMethod,
+    params: PhotonParams,
 }
 
 impl PhotonEstimator {
+    /// Method `method` with `params`, checked: counts at least 1, absorption in [0, 1), a
+    /// positive radius, and a map that fits in the memory available now.
     pub fn new(method: PhotonMethod, params: PhotonParams) -> Result<Self> {
         if params.photons == 0 {
-            return Err(Error::parameter("--photons must be at least 1"));
+            return Err(Error::invalid("photons", "must be at least 1, not 0"));
         }
         if params.gather == 0 {
-            return Err(Error::parameter("--gather must be at least 1"));
+            return Err(Error::invalid("gather", "must be at least 1, not 0"));
         }
         if params.rules.max_bounces == 0 {
-            return Err(Error::parameter("--max-bounces must be at least 1"));
+            return Err(Error::invalid("max_bounces", "must be at least 1, not 0"));
         }
         let a = params.rules.absorption;
         if !(0.0..1.0).contains(&a) {
-            return Err(Error::parameter(format!(
-                "--absorption must be in [0, 1), not {a}"
-            )));
+            return Err(Error::invalid(
+                "absorption",
+                format!("must be in [0, 1), not {a}"),
+            ));
         }
         if let Some(r) = params.max_radius {
             if r.is_nan() || r <= 0.0 {
-                return Err(Error::parameter(format!(
-                    "--max-radius must be positive, not {r}"
-                )));
+                return Err(Error::invalid("max_radius", format!("must be positive, not {r}")));
             }
         }
         check_memory(method, params.photons)?;
@@ -114,11 +123,12 @@ impl PhotonEstimator {
     fn source(&self, context: &EstimateContext, gbuffer: &GBuffer) -> Result<PhotonSource> {
         match self.params.source {
             SourceKind::Light => context.scene.light.map(PhotonSource::Light).ok_or_else(|| {
-                Error::parameter(format!(
-                    "scene '{}' has no spot light for --source light: add a [light] to its TOML \
-                     file or use --source camera",
+                let message = format!(
+                    "light needs a spot light, and scene '{}' has no spot light: add a [light] \
+                     to its TOML file or take the camera as the source",
                     context.scene.name
-                ))
+                );
+                Error::invalid("source", message)
             }),
             SourceKind::Camera => Ok(PhotonSource::Camera(
                 context.scene.camera.rays(gbuffer.width, gbuffer.height),
@@ -134,14 +144,15 @@ fn check_memory(method: PhotonMethod, photons: usize) -> Result<()> {
     let needed = method.peak_build_bytes(photons);
     if let Some(available) = available_memory() {
         if needed > available {
-            return Err(Error::parameter(format!(
-                "{photons} photons need about {:.1} GB to build the {} map ({} B per photon while \
+            let message = format!(
+                "of {photons} needs about {:.1} GB to build the {} map ({} B per photon while \
                  building), but only {:.1} GB of memory is available",
                 needed as f64 / 1e9,
                 method.name(),
                 method.peak_build_bytes(1),
                 available as f64 / 1e9
-            )));
+            );
+            return Err(Error::invalid("photons", message));
         }
     }
     Ok(())
@@ -165,28 +176,31 @@ impl Estimator for PhotonEstimator {
         self.params.photons as u64
     }
 
-    fn parameters(&self) -> serde_json::Map<String, serde_json::Value> {
+    fn parameters(&self) -> Parameters {
         let p = &self.params;
-        let value = json!({
+        Parameters {
             // No gather rays: H comes from the photon map.
-            "rays": serde_json::Value::Null,
-            "photons": p.photons,
-            "gather": p.gather,
-            "source": p.source.name(),
-            "max_bounces": p.rules.max_bounces,
-            "absorption": p.rules.absorption,
-            "max_radius": p.max_radius,
-            "normal_filter_cos": NORMAL_FILTER_COS,
-        });
-        crate::estimators::fields(value)
+            rays: None,
+            photon: Some(PhotonParameters {
+                photons: p.photons,
+                gather: p.gather,
+                source: p.source,
+                max_bounces: p.rules.max_bounces,
+                absorption: p.rules.absorption,
+                max_radius: p.max_radius,
+                normal_filter_cos: NORMAL_FILTER_COS,
+            }),
+            ..Parameters::default()
+        }
     }
 
-    fn estimate(
-        &self,
-        context: &EstimateContext,
-        gbuffer: &GBuffer,
+    /// Traces the photons and builds the map; the driver then gathers per pixel.
+    fn prepare<'a>(
+        &'a self,
+        context: &'a EstimateContext<'a>,
+        gbuffer: &'a GBuffer,
         progress: &dyn Progress,
-    ) -> Result<Estimate> {
+    ) -> Result<Work<'a>> {
         let source = self.source(context, gbuffer)?;
         let p = &self.params;
 
@@ -204,73 +218,89 @@ impl Estimator for PhotonEstimator {
         let start = Instant::now();
         let map = PhotonMap::build(&traced.photons, self.method)?;
         let photon_index = start.elapsed().as_secs_f64();
-        let (stored, paths, escaped) = (traced.photons.len(), traced.paths_traced, traced.escaped);
         let rays = RayCount {
             cast: traced.rays_cast(),
             escaped: traced.escaped_rays(),
             seconds: photon_trace,
         };
+        let work = PhotonPixels {
+            estimator: self,
+            context,
+            map,
+            k: NonZero::new(p.gather).expect("validated: gather ≥ 1"),
+            photons_stored: traced.photons.len(),
+            paths_traced: traced.paths_traced,
+            escaped_photons: traced.escaped,
+        };
         drop(traced);
-
-        let start = Instant::now();
-        let (hmd, holes) = self.gather(context, gbuffer, &map, progress);
-        let gather = start.elapsed().as_secs_f64();
-        let queries = gbuffer.points.len() - gbuffer.background_pixels();
-
-        let extra = json!({
-            "photons_stored": stored,
-            "paths_traced": paths,
-            "escaped_photons": escaped,
-            "bytes_per_photon": self.method.bytes_per_photon(),
-            "holes": holes,
-            "gather_queries_per_s": queries as f64 / gather.max(1e-9),
-        });
-        Ok(Estimate {
-            hmd,
+        Ok(Work::Pixels {
+            work: Box::new(work),
+            phases: PhaseSeconds {
+                photon_trace: Some(photon_trace),
+                photon_index: Some(photon_index),
+                ..PhaseSeconds::default()
+            },
             rays: Some(rays),
-            phases: vec![
-                ("photon_trace", photon_trace),
-                ("photon_index", photon_index),
-                ("gather", gather),
-            ],
-            extra: crate::estimators::fields(extra),
         })
     }
 }
 
-impl PhotonEstimator {
-    /// H per pixel from the map, and the number of holes. Rows run in parallel; neighbouring
-    /// pixels of a row query neighbouring points, which keeps the tree's nodes in cache.
-    fn gather(
-        &self,
-        context: &EstimateContext,
-        gbuffer: &GBuffer,
-        map: &PhotonMap,
-        progress: &dyn Progress,
-    ) -> (Vec<f32>, u64) {
-        let k = NonZero::new(self.params.gather).expect("validated: gather ≥ 1");
-        let max_radius = self.params.max_radius.unwrap_or(f32::INFINITY);
-        let width = gbuffer.width as usize;
-        let holes = AtomicU64::new(0);
-        let mut hmd = vec![f32::NAN; gbuffer.points.len()];
-        progress.start("gather", gbuffer.height as u64);
-        hmd.par_chunks_mut(width)
-            .zip(gbuffer.points.par_chunks(width))
-            .for_each(|(out, points)| {
-                let mut row_holes = 0;
-                for (h, point) in out.iter_mut().zip(points) {
-                    let Some(hit) = point else { continue };
-                    let mut mean = HarmonicMean::default();
-                    map.gather(hit.point, hit.normal, k, max_radius, NORMAL_FILTER_COS, |d| {
-                        mean.add(d, context.clamp)
-                    });
-                    *h = mean.value();
-                    row_holes += h.is_nan() as u64;
-                }
-                holes.fetch_add(row_holes, Ordering::Relaxed);
-                progress.advance(1);
+/// The photon gather on one image, over the map built for it. Neighbouring pixels of a row
+/// query neighbouring points, which keeps the tree's nodes in cache.
+struct PhotonPixels<'a> {
+    estimator: &'a PhotonEstimator,
+    context: &'a EstimateContext<'a>,
+    map: PhotonMap,
+    k: NonZero<usize>,
+    photons_stored: usize,
+    paths_traced: u64,
+    escaped_photons: u64,
+}
+
+impl PixelWork for PhotonPixels<'_> {
+    fn label(&self) -> &'static str {
+        "gather"
+    }
+
+    fn casts_rays(&self) -> bool {
+        false
+    }
+
+    fn record_phase(&self, phases: &mut PhaseSeconds, seconds: f64) {
+        phases.gather = Some(seconds);
+    }
+
+    fn worker(&self) -> Box<dyn PixelWorker + '_> {
+        Box::new(PhotonWorker(self))
+    }
+
+    fn details(&self, pass: &PixelPass) -> Details {
+        Details {
+            photon: Some(PhotonDetails {
+                photons_stored: self.photons_stored,
+                paths_traced: self.paths_traced,
+                escaped_photons: self.escaped_photons,
+                bytes_per_photon: self.estimator.method.bytes_per_photon(),
+                holes: pass.tally.holes,
+                gather_queries_per_s: pass.pixels as f64 / pass.seconds.max(1e-9),
+            }),
+            ..Details::default()
+        }
+    }
+}
+
+/// A thread's view of [`PhotonPixels`]: the gather needs no scratch.
+struct PhotonWorker<'a>(&'a PhotonPixels<'a>);
+
+impl PixelWorker for PhotonWorker<'_> {
+    fn pixel(&mut self, hit: &Hit, _: u64, _: &mut Tally) -> f32 {
+        let w = self.0;
+        let max_radius = w.estimator.params.max_radius.unwrap_or(f32::INFINITY);
+        let mut mean = HarmonicMean::default();
+        w.map
+            .gather(hit.point, hit.normal, w.k, max_radius, NORMAL_FILTER_COS, |d| {
+                mean.add(d, w.context.clamp)
             });
-        progress.finish();
-        (hmd, holes.into_inner())
+        mean.value()
     }
 }

@@ -10,7 +10,7 @@
 //! furniture and ornaments.
 
 pub mod architecture;
-pub mod figure;
+pub(crate) mod figure;
 pub mod furniture;
 pub mod ornaments;
 pub mod room;

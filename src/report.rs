@@ -1,0 +1,250 @@
+//! The render report: every parameter, the scene's statistics and the timings of one image,
+//! as typed data. Serialised once, as the JSON sidecar of SPEC §7, whose keys scripts rely on
+//! and which therefore keep their names; fields that a method does not measure are `null`
+//! (or absent, for a method's own groups), never zero.
+
+use serde::{Deserialize, Serialize};
+
+use crate::estimators::photon::SourceKind;
+use crate::sampling::Weighting;
+
+/// One rendered image's report: the JSON sidecar.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct RenderReport {
+    /// The hmdist that rendered it.
+    pub hmdist_version: String,
+    /// The estimator's registry name.
+    pub method: String,
+    /// The scene's name.
+    pub scene: String,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Seed of the random numbers.
+    pub seed: u64,
+    /// Worker threads used (never changes the image).
+    pub threads: usize,
+    /// The ray-casting kernel (`scalar`, `avx2`, `avx512`).
+    pub kernel: String,
+    /// The BVH preset built (`fast` or `high`).
+    pub bvh: String,
+    /// Distances were clamped at this; `null` for no clamp.
+    pub max_distance: Option<f32>,
+    /// Triangles in the scene.
+    pub triangles: usize,
+    /// Diagonal of the scene's bounding box.
+    pub l_diag: f32,
+    /// The smallest distance a sample counts as: `1e-6 · l_diag`.
+    pub d_min: f32,
+    /// The scene's bounding box.
+    pub bounds: BoundsReport,
+    /// The camera.
+    pub camera: CameraReport,
+    /// The spot light, where the scene has one.
+    pub light: Option<LightReport>,
+    /// Grey = clamp(display_scale · H) in the PNG.
+    pub display_scale: f32,
+    /// Pixels whose camera ray met nothing.
+    pub background_pixels: usize,
+    /// Rays the estimator cast (primary rays not included); `null` for one that casts none.
+    pub rays_cast: Option<u64>,
+    /// Of those, rays that met nothing.
+    pub escaped_rays: Option<u64>,
+    /// Million rays per second over the phase that cast them.
+    pub mrays_per_s: Option<f64>,
+    /// Seconds per phase.
+    pub seconds: Seconds,
+    /// The method's parameters.
+    #[serde(flatten)]
+    pub parameters: Parameters,
+    /// The method's own figures.
+    #[serde(flatten)]
+    pub details: Details,
+}
+
+impl RenderReport {
+    /// Adds the seconds it took to load the scene (which the library does not see) to
+    /// `seconds.load` and `seconds.total`.
+    pub fn add_load_seconds(&mut self, seconds: f64) {
+        self.seconds.load += seconds;
+        self.seconds.total += seconds;
+    }
+
+    /// The report as pretty-printed JSON.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("a report serialises")
+    }
+}
+
+/// An axis-aligned box.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+pub struct BoundsReport {
+    /// Smallest corner.
+    pub min: [f32; 3],
+    /// Largest corner.
+    pub max: [f32; 3],
+}
+
+/// A pinhole camera.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+pub struct CameraReport {
+    /// Eye position.
+    pub eye: [f32; 3],
+    /// The point looked at.
+    pub target: [f32; 3],
+    /// Up direction.
+    pub up: [f32; 3],
+    /// Vertical field of view, degrees.
+    pub fov_y_deg: f32,
+}
+
+/// A spot light.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+pub struct LightReport {
+    /// Position.
+    pub position: [f32; 3],
+    /// Unit direction of the cone's axis.
+    pub direction: [f32; 3],
+    /// Half the cone's opening angle, degrees.
+    pub cone_half_angle_deg: f32,
+}
+
+/// Seconds per phase: the driver's, then the estimator's own (absent where it has none).
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
+pub struct Seconds {
+    /// Loading the scene (added by the caller that loaded it).
+    pub load: f64,
+    /// Building the BVH.
+    pub accel_build: f64,
+    /// Primary rays.
+    pub primary: f64,
+    /// The estimator, from preparation to the last pixel.
+    pub estimate: f64,
+    /// Everything.
+    pub total: f64,
+    /// The estimator's own phases.
+    #[serde(flatten)]
+    pub phases: PhaseSeconds,
+}
+
+/// The estimators' own phases; each present only for the method that has it.
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
+pub struct PhaseSeconds {
+    /// CPU cube map: texels are filled at their first lookup.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cubemap_build_and_lookup: Option<f64>,
+    /// GPU cube map: rasterising the hemicubes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cubemap_build: Option<f64>,
+    /// GPU cube map: the lookups.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cubemap_lookup: Option<f64>,
+    /// Photon methods: tracing the paths.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub photon_trace: Option<f64>,
+    /// Photon methods: building the kd-tree.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub photon_index: Option<f64>,
+    /// Photon methods: the K-nearest gathers.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gather: Option<f64>,
+}
+
+/// A method's parameters. `rays` is there for every method (`null` for the photon methods);
+/// the groups are there for the methods that have them.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Parameters {
+    /// Gather rays per pixel N.
+    pub rays: Option<u32>,
+    /// `gather` and `cubemap`.
+    #[serde(flatten)]
+    pub gather: Option<GatherParameters>,
+    /// `cubemap`.
+    #[serde(flatten)]
+    pub cubemap: Option<CubemapParameters>,
+    /// `photon1` and `photon2`.
+    #[serde(flatten)]
+    pub photon: Option<PhotonParameters>,
+}
+
+/// The gather directions.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GatherParameters {
+    /// Direction weighting.
+    pub weighting: Weighting,
+    /// The stratification grid `a × b` (a · b = N).
+    pub strata: [u32; 2],
+}
+
+/// The hemicube.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CubemapParameters {
+    /// Per-quadrant resolution R.
+    pub cube_res: u32,
+}
+
+/// The photon map and its gather.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PhotonParameters {
+    /// Photons stored P.
+    pub photons: usize,
+    /// Nearest photons gathered per pixel K.
+    pub gather: usize,
+    /// Where paths start.
+    pub source: SourceKind,
+    /// A path ends at this many surface interactions.
+    pub max_bounces: u32,
+    /// Probability that a path ends at each interaction.
+    pub absorption: f32,
+    /// Gather radius; `null` for no limit.
+    pub max_radius: Option<f32>,
+    /// Gathered photons count where `n_j · n` is at least this.
+    pub normal_filter_cos: f32,
+}
+
+/// A method's own figures; each group is there for the methods that measure it.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Details {
+    /// `cubemap`.
+    #[serde(flatten)]
+    pub cubemap: Option<CubemapDetails>,
+    /// `photon1` and `photon2`.
+    #[serde(flatten)]
+    pub photon: Option<PhotonDetails>,
+}
+
+/// What the cube map did.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct CubemapDetails {
+    /// `cpu` or `gpu`: the backend that ran.
+    pub backend: String,
+    /// The GPU adapter; `null` for the CPU backend.
+    pub adapter: Option<String>,
+    /// Texels filled: every texel of every hemicube on the GPU; one ray per texel looked up
+    /// on the CPU.
+    pub texels_rasterised: u64,
+    /// Texels of one hemicube, `12 R²`.
+    pub texels_per_hemicube: u64,
+    /// Lookups (pixel, direction).
+    pub lookups: u64,
+    /// Lookups whose texel holds no surface within `max_distance`.
+    pub escaped_lookups: u64,
+}
+
+/// What the photon methods did.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct PhotonDetails {
+    /// Photons in the map.
+    pub photons_stored: usize,
+    /// Paths traced to store them.
+    pub paths_traced: u64,
+    /// Stored photons whose continuation escaped the scene.
+    pub escaped_photons: u64,
+    /// Map bytes per photon, kd-tree included.
+    pub bytes_per_photon: usize,
+    /// Surface pixels that gathered no photon (NaN).
+    pub holes: u64,
+    /// Pixel gathers per second.
+    pub gather_queries_per_s: f64,
+}
