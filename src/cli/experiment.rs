@@ -5,15 +5,14 @@ use std::path::PathBuf;
 use clap::Args;
 
 use hmdist::error::Result;
-use hmdist::experiments::{Preset, Runner, EXPERIMENTS};
+use hmdist::experiments::{select, Preset, Runner, EXPERIMENTS};
 
 use super::bar::Bar;
 
 #[derive(Args)]
 pub struct ExperimentArgs {
-    /// Experiment: all, table1 (f_diff vs rays, fig12/fig13), table2 (seconds vs rays), fig9
-    /// (gather vs cube map), table3 (photons x K, fig14/fig15), fig10 (methods I and II),
-    /// table4 (photon map build), fig16_17 (source x bounces x K x photons), memory.
+    /// Experiment: all, or one of these.
+    #[arg(value_parser = experiment_names())]
     name: String,
     /// Scene: a built-in (cube, hall, sphere, slab, dome) or a file.
     #[arg(long, default_value = "cube")]
@@ -29,15 +28,18 @@ pub struct ExperimentArgs {
     quiet: bool,
 }
 
+/// `all` and the experiments' names, with their summaries as help.
+fn experiment_names() -> clap::builder::PossibleValuesParser {
+    let all = clap::builder::PossibleValue::new("all").help("every experiment below, in order");
+    let each = EXPERIMENTS
+        .iter()
+        .map(|e| clap::builder::PossibleValue::new(e.name).help(e.summary));
+    clap::builder::PossibleValuesParser::new(std::iter::once(all).chain(each))
+}
+
 pub fn run(args: ExperimentArgs) -> Result<()> {
     let preset = args.preset;
-    if args.name != "all" && !EXPERIMENTS.contains(&args.name.as_str()) {
-        return Err(hmdist::error::Error::parameter(format!(
-            "unknown experiment '{}': expected all or one of {}",
-            args.name,
-            EXPERIMENTS.join(", ")
-        )));
-    }
+    select(&args.name)?;
     let bar = Bar::new(args.quiet);
     let mut runner = Runner::new(&args.scene, preset, &args.out, &bar)?;
     runner.run(&args.name)?;

@@ -8,19 +8,22 @@
 //! scene's content is its [`Scene::fingerprint`], so editing any file it was loaded from (a
 //! TOML scene's meshes included) renders again.
 //!
-//! Experiments: `table1` (with its grids `fig12`, `fig13` and a plot), `table2`, `fig9`,
-//! `table3` (with `fig14`, `fig15`), `fig10`, `table4`, `fig16_17`, `memory`.
+//! The experiments are listed once, in [`EXPERIMENTS`]: the ray studies ([`rays`]: Tables
+//! 1–2, Fig. 9) and the photon studies ([`photons`]: Tables 3–4, Fig. 10, 16/17, memory).
+//! The paper's published numbers are in [`paper`].
 
-mod analysis;
 mod grid;
+pub mod paper;
+mod photons;
 pub mod plot;
+mod rays;
 mod report;
 pub mod table;
 
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
-use crate::estimators::Estimator;
+use crate::estimators::{registry, Estimator, MethodConfig};
 use crate::image::{exr, write_atomically, HmdImage};
 use crate::progress::{Progress, Silent};
 use crate::render::{render, RenderOptions};
@@ -28,10 +31,85 @@ use crate::report::RenderReport;
 use crate::scene::{stable_hash, Scene};
 pub use table::Table;
 
-/// Experiments by name, in the order `all` runs them.
-pub const EXPERIMENTS: [&str; 8] = [
-    "table1", "table2", "fig9", "table3", "fig10", "table4", "fig16_17", "memory",
+/// One experiment: its name, what it shows, how many images it may render, and the code.
+pub struct Experiment {
+    /// The name `hmdist experiment` takes.
+    pub name: &'static str,
+    /// What it reproduces.
+    pub summary: &'static str,
+    /// At most how many images it renders at a preset (cached ones take no time): the
+    /// progress bar's length.
+    pub images: fn(&PresetParams) -> u64,
+    /// Runs it.
+    pub run: fn(&Runner) -> Result<Section>,
+}
+
+/// Every experiment, in the order `all` runs them.
+pub const EXPERIMENTS: &[Experiment] = &[
+    Experiment {
+        name: "table1",
+        summary: "f_diff against rays, gather and cube map (with fig12, fig13 and a plot)",
+        images: |p| 1 + 2 * p.rays.len() as u64,
+        run: rays::table1,
+    },
+    Experiment {
+        name: "table2",
+        summary: "seconds against rays, gather and cube map",
+        images: |p| 1 + 2 * p.rays.len() as u64,
+        run: rays::table2,
+    },
+    Experiment {
+        name: "fig9",
+        summary: "gather against the cube map at R = 64 and 128",
+        images: |_| 3,
+        run: rays::fig9,
+    },
+    Experiment {
+        name: "table3",
+        summary: "photon gather seconds and f_diff by photons and K, methods I and II (with fig14, fig15)",
+        images: |p| 1 + 2 * (p.photons.len() * p.gathers.len()) as u64,
+        run: photons::table3,
+    },
+    Experiment {
+        name: "fig10",
+        summary: "methods I and II with very many photons and a very large K",
+        images: |_| 3,
+        run: photons::fig10,
+    },
+    Experiment {
+        name: "table4",
+        summary: "photon map build seconds by photons, light and camera sources",
+        images: |_| 0,
+        run: photons::table4,
+    },
+    Experiment {
+        name: "fig16_17",
+        summary: "method II by source, bounces, K and photons",
+        images: |p| 1 + 4 * (p.fig16_photons.len() * p.gathers.len()) as u64,
+        run: photons::fig16_17,
+    },
+    Experiment {
+        name: "memory",
+        summary: "bytes per photon against the paper's",
+        images: |_| 0,
+        run: photons::memory,
+    },
 ];
+
+/// The experiments `name` stands for: every one for `all`.
+pub fn select(name: &str) -> Result<Vec<&'static Experiment>> {
+    if name == "all" {
+        return Ok(EXPERIMENTS.iter().collect());
+    }
+    match EXPERIMENTS.iter().find(|e| e.name == name) {
+        Some(e) => Ok(vec![e]),
+        None => {
+            let names: Vec<&str> = EXPERIMENTS.iter().map(|e| e.name).collect();
+            let message = format!("'{name}' is not all or one of {}", names.join(", "));
+            Err(Error::invalid("experiment", message))
+        }
+    }
+}
 
 /// Seed of the reference images: independent of the seed of the images compared with them.
 pub const REFERENCE_SEED: u64 = 1_000_003;
@@ -145,42 +223,25 @@ impl<'a> Runner<'a> {
 
     /// Runs experiment `name` (or every one for `all`), then rewrites the report.
     pub fn run(&mut self, name: &str) -> Result<()> {
-        let names: Vec<&str> = if name == "all" {
-            EXPERIMENTS.to_vec()
-        } else {
-            vec![name]
-        };
-        for name in names {
-            // Images each experiment may render (cached ones take no time).
-            let images = match name {
-                "table1" | "table2" => 1 + 2 * self.params.rays.len() as u64,
-                "fig9" => 3,
-                "table3" => 1 + 2 * (self.params.photons.len() * self.params.gathers.len()) as u64,
-                "fig10" => 3,
-                "fig16_17" => 1 + 4 * (self.params.fig16_photons.len() * self.params.gathers.len()) as u64,
-                _ => 0,
-            };
-            self.progress.start(name, images);
-            let section = match name {
-                "table1" => analysis::table1(self)?,
-                "table2" => analysis::table2(self)?,
-                "fig9" => analysis::fig9(self)?,
-                "table3" => analysis::table3(self)?,
-                "fig10" => analysis::fig10(self)?,
-                "fig16_17" => analysis::fig16_17(self)?,
-                "table4" => analysis::table4(self)?,
-                "memory" => analysis::memory(self)?,
-                _ => {
-                    return Err(Error::parameter(format!(
-                        "unknown experiment '{name}': expected all or one of {}",
-                        EXPERIMENTS.join(", ")
-                    )))
-                }
-            };
+        for experiment in select(name)? {
+            self.progress
+                .start(experiment.name, (experiment.images)(&self.params));
+            let section = (experiment.run)(self)?;
             self.progress.finish();
             self.sections.push(section);
         }
         report::write(self)
+    }
+
+    /// The image method `method` (a registry name) renders with `config` and `seed`: see
+    /// [`Runner::image`].
+    pub fn method_image(
+        &self,
+        method: &str,
+        config: &MethodConfig,
+        seed: u64,
+    ) -> Result<(HmdImage, RenderReport)> {
+        self.image(registry::build(method, config)?.as_ref(), seed)
     }
 
     /// The image `estimator` renders at the preset's size with `seed`, from the cache when

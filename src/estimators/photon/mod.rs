@@ -36,7 +36,9 @@ pub const DEFAULT_ABSORPTION: f32 = 0.2;
 pub const NORMAL_FILTER_COS: f32 = 0.9;
 
 /// Where photon paths start.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
+)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum SourceKind {

@@ -1,0 +1,144 @@
+//! Every number the paper publishes that the experiments compare against (SPEC §6), named.
+//! Scene A and scene B are the paper's own scenes; its machines were a Xeon E5420 at 2.5 GHz
+//! (plain C++) and a GeForce 8800 GTX.
+
+/// Table 1's ray counts as its two halves are headed (one column of each half was lost, so
+/// which count each value belongs to is uncertain).
+pub const TABLE1_HEADED_RAYS: [u32; 9] = [32, 64, 128, 256, 512, 1024, 2048, 4096, 8192];
+
+/// Table 1, `f_diff` of CPU final gathering against the 65,536-ray reference, scene A, in
+/// the text's order.
+pub const TABLE1_CPU_A: [f64; 8] = [0.5971, 0.3121, 0.1967, 0.1113, 0.0357, 0.0248, 0.0351, 0.0109];
+
+/// Table 1, CPU final gathering, scene B, in the text's order.
+pub const TABLE1_CPU_B: [f64; 8] = [0.8255, 0.4799, 0.3003, 0.2181, 0.0994, 0.0460, 0.0454, 0.0211];
+
+/// Table 1, the GPU cube map, scene A, in the text's order.
+pub const TABLE1_GPU_A: [f64; 8] = [0.5538, 0.3178, 0.1921, 0.1050, 0.0276, 0.0155, 0.0173, 0.0080];
+
+/// Final gathering's error roughly halves per doubling of rays up to about this many rays,
+/// then oscillates down slowly.
+pub const LEVEL_OFF_RAYS: u32 = 1024;
+
+/// Mean difference between CPU gathering and the GPU cube map at 65,536 rays, by per-quadrant
+/// resolution R.
+pub const CPU_VS_GPU_AT_65536: [CubeDifference; 2] = [
+    CubeDifference {
+        cube_res: 64,
+        f_diff: 0.029104,
+    },
+    CubeDifference {
+        cube_res: 128,
+        f_diff: 0.029091,
+    },
+];
+
+/// One cube-map resolution's difference from final gathering.
+pub struct CubeDifference {
+    /// Per-quadrant resolution R.
+    pub cube_res: u32,
+    /// Mean |ΔH| in percent of the scene diagonal.
+    pub f_diff: f64,
+}
+
+/// Table 2: seconds for a 1024 × 1024 image, CPU final gathering against the GPU cube map.
+pub const TABLE2: [Table2Row; 7] = [
+    Table2Row::new(16, 61.6, 2412.4),
+    Table2Row::new(64, 251.6, 2427.8),
+    Table2Row::new(256, 958.0, 2430.5),
+    Table2Row::new(1024, 3809.7, 2448.4),
+    Table2Row::new(4096, 14825.3, 2473.6),
+    Table2Row::new(16384, 56647.8, 2487.8),
+    Table2Row::new(65536, 225910.1, 2596.0),
+];
+
+/// One row of [`TABLE2`].
+pub struct Table2Row {
+    /// Gather rays per pixel.
+    pub rays: u32,
+    /// CPU final gathering, seconds.
+    pub cpu_seconds: f64,
+    /// GPU cube map, seconds.
+    pub gpu_seconds: f64,
+}
+
+impl Table2Row {
+    const fn new(rays: u32, cpu_seconds: f64, gpu_seconds: f64) -> Self {
+        Table2Row {
+            rays,
+            cpu_seconds,
+            gpu_seconds,
+        }
+    }
+}
+
+/// Table 3's corners: seconds to gather (map build excluded), scene A, 1024 × 1024.
+pub const TABLE3: [Table3Corner; 4] = [
+    Table3Corner::new(130_000, 64, 17.5, 19.2),
+    Table3Corner::new(130_000, 1024, 195.8, 221.2),
+    Table3Corner::new(8_530_000, 64, 120.2, 122.8),
+    Table3Corner::new(8_530_000, 1024, 403.8, 436.1),
+];
+
+/// One corner of [`TABLE3`].
+pub struct Table3Corner {
+    /// Photons stored.
+    pub photons: usize,
+    /// Photons gathered per pixel K.
+    pub k: usize,
+    /// Method I, seconds.
+    pub method1_seconds: f64,
+    /// Method II, seconds.
+    pub method2_seconds: f64,
+}
+
+impl Table3Corner {
+    const fn new(photons: usize, k: usize, method1_seconds: f64, method2_seconds: f64) -> Self {
+        Table3Corner {
+            photons,
+            k,
+            method1_seconds,
+            method2_seconds,
+        }
+    }
+}
+
+/// The paper's two path lengths (bounce limits): Table 3 and Fig. 10 use the first, Table 4
+/// the second, Fig. 16/17 both.
+pub const BOUNCES: [u32; 2] = [20, 80];
+
+/// Table 4: seconds to build the photon map (80 bounces, kd-tree included).
+pub const TABLE4: [Table4Row; 3] = [
+    Table4Row::new("130 K", 1.6, 1.0),
+    Table4Row::new("1.06 M", 9.4, 6.4),
+    Table4Row::new("8.53 M", 83.8, 54.4),
+];
+
+/// One row of [`TABLE4`].
+pub struct Table4Row {
+    /// Photons stored, as the paper writes it.
+    pub photons: &'static str,
+    /// Light source, seconds.
+    pub light_seconds: f64,
+    /// Camera source, seconds.
+    pub camera_seconds: f64,
+}
+
+impl Table4Row {
+    const fn new(photons: &'static str, light_seconds: f64, camera_seconds: f64) -> Self {
+        Table4Row {
+            photons,
+            light_seconds,
+            camera_seconds,
+        }
+    }
+}
+
+/// Bytes per photon, kd-tree included: method I.
+pub const BYTES_PER_PHOTON_METHOD1: usize = 46;
+/// Bytes per photon, kd-tree included: method II.
+pub const BYTES_PER_PHOTON_METHOD2: usize = 58;
+/// The paper's largest map, photons.
+pub const LARGEST_MAP_PHOTONS: usize = 8_530_000;
+/// Memory of the largest map, MB (approximately).
+pub const LARGEST_MAP_MB: f64 = 470.0;

@@ -1,0 +1,389 @@
+//! The photon studies: gather cost and accuracy by photon count and K, methods I and II, path
+//! sources and lengths, map build cost and memory (paper Tables 3–4, Fig. 10, 14–17).
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use super::grid::{write_grid, Tile};
+use super::paper;
+use super::plot::{log_log, Series};
+use super::rays::reference;
+use super::{Runner, Section, Table};
+use crate::accel::{Accel, BuildQuality};
+use crate::error::Result;
+use crate::estimators::photon::{
+    trace_photons, PathRules, PhotonMap, PhotonMethod, PhotonSource, SourceKind, DEFAULT_ABSORPTION,
+};
+use crate::estimators::MethodConfig;
+use crate::image::picture::grey;
+use crate::metrics::f_diff;
+
+/// The paper's short paths (Table 3, Fig. 10).
+const SHORT_PATHS: u32 = paper::BOUNCES[0];
+/// The paper's long paths (Table 4).
+const LONG_PATHS: u32 = paper::BOUNCES[1];
+
+/// Both photon methods, with their registry names.
+const METHODS: [(PhotonMethod, &str); 2] = [
+    (PhotonMethod::StoredDistance, "photon1"),
+    (PhotonMethod::NextHitPoint, "photon2"),
+];
+
+/// A photon method's configuration: `photons`, `k` gathered, `source`, `max_bounces`,
+/// others default.
+fn photon_config(photons: usize, k: usize, source: SourceKind, max_bounces: u32) -> MethodConfig {
+    MethodConfig {
+        photons,
+        gather: k,
+        source,
+        max_bounces,
+        ..MethodConfig::default()
+    }
+}
+
+/// The light source where the scene has a spot light, else the camera.
+fn default_source(runner: &Runner) -> SourceKind {
+    if runner.scene.light.is_some() {
+        SourceKind::Light
+    } else {
+        SourceKind::Camera
+    }
+}
+
+/// One method's figures in one cell of Table 3.
+struct Table3Cell {
+    gather_seconds: f64,
+    f_diff: f64,
+    holes: u64,
+}
+
+/// Table 3 with Fig. 14 (method I) and Fig. 15 (method II): gather seconds and f_diff by
+/// photon count and K, and the pictures.
+pub fn table3(runner: &Runner) -> Result<Section> {
+    let p = &runner.params;
+    let reference = reference(runner)?;
+    let l_diag = runner.scene.diagonal();
+    let s = runner.scene.display_scale;
+    let source = default_source(runner);
+    let mut table = Table::new(
+        &format!(
+            "Table 3 ({}): gather seconds (map build excluded) and f_diff, {}², {} source, {SHORT_PATHS} bounces",
+            runner.preset.name(),
+            p.size,
+            source.name()
+        ),
+        &[
+            "photons",
+            "K",
+            "I gather s",
+            "II gather s",
+            "I f_diff",
+            "II f_diff",
+            "I holes",
+            "II holes",
+        ],
+    );
+    let mut grids = [vec![], vec![]];
+    let mut sums = [0.0, 0.0];
+    for &photons in &p.photons {
+        for &k in &p.gathers {
+            let mut cells = vec![];
+            for (m, (_, method)) in METHODS.iter().enumerate() {
+                let config = photon_config(photons, k, source, SHORT_PATHS);
+                let (image, report) = runner.method_image(method, &config, 1)?;
+                let d = f_diff(&reference, &image, l_diag)?;
+                sums[m] += d.value;
+                cells.push(Table3Cell {
+                    gather_seconds: report.seconds.phases.gather.unwrap_or(f64::NAN),
+                    f_diff: d.value,
+                    holes: report.details.photon.map_or(0, |p| p.holes),
+                });
+                grids[m].push(Some(Tile {
+                    caption: format!("{}K K={k}", photons / 1000),
+                    picture: grey(&image, s),
+                }));
+            }
+            let mut row = vec![photons.to_string(), k.to_string()];
+            row.extend(cells.iter().map(|c| format!("{:.3}", c.gather_seconds)));
+            row.extend(cells.iter().map(|c| format!("{:.4}", c.f_diff)));
+            row.extend(cells.iter().map(|c| c.holes.to_string()));
+            table.push(row);
+        }
+    }
+    let mut files = table.write(&runner.out, "table3")?;
+    for (name, tiles) in [("fig14", &grids[0]), ("fig15", &grids[1])] {
+        let path = runner.out.join(format!("{name}.png"));
+        write_grid(&path, tiles, p.gathers.len())?;
+        files.push(path);
+    }
+    let n = table.rows.len() as f64;
+    let corners: Vec<String> = paper::TABLE3
+        .iter()
+        .map(|c| {
+            format!(
+                "{} photons, K = {}: {} / {} s",
+                c.photons, c.k, c.method1_seconds, c.method2_seconds
+            )
+        })
+        .collect();
+    let notes = vec![format!(
+        "Method II reduces method I's error near corners and thin parts (paper Fig. 6–7, 10): mean f_diff over this table {:.4} (I) against {:.4} (II). Paper, Table 3 (1024², method I / II): {}.",
+        sums[0] / n,
+        sums[1] / n,
+        corners.join("; ")
+    )];
+    Ok(Section {
+        name: "table3".into(),
+        tables: vec![table],
+        files,
+        notes,
+    })
+}
+
+/// Fig. 10: methods I and II side by side with very many photons and a very large gather.
+pub fn fig10(runner: &Runner) -> Result<Section> {
+    let p = &runner.params;
+    let reference = reference(runner)?;
+    let (photons, k) = p.fig10;
+    let source = default_source(runner);
+    let s = runner.scene.display_scale;
+    let mut table = Table::new(
+        &format!(
+            "Fig. 10 ({}): {photons} photons, K = {k}, {} source, {SHORT_PATHS} bounces",
+            runner.preset.name(),
+            source.name()
+        ),
+        &["method", "f_diff", "holes"],
+    );
+    let mut tiles = vec![Some(Tile {
+        caption: "reference".into(),
+        picture: grey(&reference, s),
+    })];
+    for (_, method) in METHODS {
+        let config = photon_config(photons, k, source, SHORT_PATHS);
+        let (image, report) = runner.method_image(method, &config, 1)?;
+        let d = f_diff(&reference, &image, runner.scene.diagonal())?;
+        table.push(vec![
+            method.into(),
+            format!("{:.4}", d.value),
+            report.details.photon.map_or(0, |p| p.holes).to_string(),
+        ]);
+        tiles.push(Some(Tile {
+            caption: method.into(),
+            picture: grey(&image, s),
+        }));
+    }
+    let path = runner.out.join("fig10.png");
+    write_grid(&path, &tiles, 3)?;
+    let mut files = table.write(&runner.out, "fig10")?;
+    files.push(path);
+    Ok(Section {
+        name: "fig10".into(),
+        tables: vec![table],
+        files,
+        notes: vec![],
+    })
+}
+
+/// Fig. 16 (light source) and 17 (camera source): method II by max bounces (the paper's two
+/// path lengths; equal stored photons), K and photon count, with f_diff against the
+/// reference.
+pub fn fig16_17(runner: &Runner) -> Result<Section> {
+    let p = &runner.params;
+    let reference = reference(runner)?;
+    let l_diag = runner.scene.diagonal();
+    let s = runner.scene.display_scale;
+    let mut sources = vec![SourceKind::Camera];
+    if runner.scene.light.is_some() {
+        sources.insert(0, SourceKind::Light);
+    }
+    let mut table = Table::new(
+        &format!(
+            "Fig. 16/17 ({}): method II f_diff by source, bounces, K and photons",
+            runner.preset.name()
+        ),
+        &["source", "max bounces", "K", "photons", "f_diff"],
+    );
+    let mut files = vec![];
+    let mut by = BTreeMap::<(SourceKind, u32), Vec<f64>>::new();
+    for &source in &sources {
+        let mut tiles = vec![];
+        for bounces in paper::BOUNCES {
+            for &photons in &p.fig16_photons {
+                for &k in &p.gathers {
+                    let config = photon_config(photons, k, source, bounces);
+                    let (image, _) = runner.method_image("photon2", &config, 1)?;
+                    let d = f_diff(&reference, &image, l_diag)?;
+                    by.entry((source, bounces)).or_default().push(d.value);
+                    table.push(vec![
+                        source.name().into(),
+                        bounces.to_string(),
+                        k.to_string(),
+                        photons.to_string(),
+                        format!("{:.4}", d.value),
+                    ]);
+                    tiles.push(Some(Tile {
+                        caption: format!("B{bounces} {}K K{k}", photons / 1000),
+                        picture: grey(&image, s),
+                    }));
+                }
+            }
+        }
+        let name = match source {
+            SourceKind::Light => "fig16",
+            SourceKind::Camera => "fig17",
+        };
+        let path = runner.out.join(format!("{name}.png"));
+        write_grid(&path, &tiles, p.gathers.len())?;
+        files.push(path);
+    }
+    files.extend(table.write(&runner.out, "fig16_17")?);
+    let mean = |source: SourceKind, bounces: Option<u32>| {
+        let v: Vec<f64> = by
+            .iter()
+            .filter(|((s, b), _)| *s == source && bounces.is_none_or(|x| x == *b))
+            .flat_map(|(_, v)| v.iter().copied())
+            .collect();
+        v.iter().sum::<f64>() / v.len() as f64
+    };
+    // Whether `better` beats `other` by more than 1 %, the noise between such runs.
+    let verdict = |better: f64, other: f64| {
+        if better < 0.99 * other {
+            "holds here"
+        } else if better > 1.01 * other {
+            "does not hold here"
+        } else {
+            "no clear difference here (within 1 %)"
+        }
+    };
+    let mut notes = vec![];
+    if runner.scene.light.is_some() {
+        let (light, camera) = (mean(SourceKind::Light, None), mean(SourceKind::Camera, None));
+        notes.push(format!(
+            "Light-sourced photons do better in scene A (paper): {} — mean f_diff {light:.4} (light) against {camera:.4} (camera).",
+            verdict(light, camera)
+        ));
+    }
+    let source = default_source(runner);
+    let (short, long) = (mean(source, Some(SHORT_PATHS)), mean(source, Some(LONG_PATHS)));
+    notes.push(format!(
+        "Fewer, longer paths ({LONG_PATHS} bounces) do better in scene A (paper): {} — {} source, mean f_diff {long:.4} ({LONG_PATHS}) against {short:.4} ({SHORT_PATHS}).",
+        verdict(long, short),
+        source.name()
+    ));
+    Ok(Section {
+        name: "fig16_17".into(),
+        tables: vec![table],
+        files,
+        notes,
+    })
+}
+
+/// Table 4: photon map build seconds (trace and kd-tree) against photon count, light vs camera.
+pub fn table4(runner: &Runner) -> Result<Section> {
+    let p = &runner.params;
+    let accel = Accel::build(&runner.scene.mesh, BuildQuality::High);
+    let camera = runner.scene.camera.rays(p.size, p.size);
+    let mut sources = vec![("camera", PhotonSource::Camera(camera, p.size, p.size))];
+    if let Some(light) = runner.scene.light {
+        sources.insert(0, ("light", PhotonSource::Light(light)));
+    }
+    let rules = PathRules {
+        max_bounces: LONG_PATHS,
+        absorption: DEFAULT_ABSORPTION,
+    };
+    let mut ours = Table::new(
+        &format!(
+            "Table 4 ({}): photon map build seconds, {LONG_PATHS} bounces, `{}`",
+            runner.preset.name(),
+            runner.scene.name
+        ),
+        &["photons", "source", "trace s", "kd-tree s", "total s"],
+    );
+    let mut series: Vec<Series> = sources
+        .iter()
+        .map(|(name, _)| Series {
+            label: format!("{name} source"),
+            points: vec![],
+        })
+        .collect();
+    for &photons in &p.photons {
+        for ((name, source), series) in sources.iter().zip(&mut series) {
+            let start = Instant::now();
+            let traced = trace_photons(&accel, source, rules, photons, 1, &|_| {})?;
+            let trace = start.elapsed().as_secs_f64();
+            let start = Instant::now();
+            let map = PhotonMap::build(&traced.photons, PhotonMethod::StoredDistance)?;
+            let index = start.elapsed().as_secs_f64();
+            drop(map);
+            series.points.push((photons as f64, trace + index));
+            ours.push(vec![
+                photons.to_string(),
+                name.to_string(),
+                format!("{trace:.2}"),
+                format!("{index:.2}"),
+                format!("{:.2}", trace + index),
+            ]);
+        }
+    }
+    let mut published = Table::new(
+        &format!("Table 4 (paper, {LONG_PATHS} bounces, light / camera, seconds)"),
+        &["photons", "light", "camera"],
+    );
+    for row in &paper::TABLE4 {
+        published.push(vec![
+            row.photons.into(),
+            format!("{}", row.light_seconds),
+            format!("{}", row.camera_seconds),
+        ]);
+    }
+    let mut files = ours.write(&runner.out, "table4")?;
+    files.extend(published.write(&runner.out, "table4_paper")?);
+    let plot = runner.out.join("table4.svg");
+    log_log(
+        &plot,
+        "photon map build (trace + kd-tree)",
+        "photons stored",
+        "seconds",
+        &series,
+    )?;
+    files.push(plot);
+    Ok(Section {
+        name: "table4".into(),
+        tables: vec![ours, published],
+        files,
+        notes: vec![],
+    })
+}
+
+/// Memory per photon, ours against the paper's.
+pub fn memory(runner: &Runner) -> Result<Section> {
+    let mut table = Table::new(
+        "Bytes per photon, kd-tree included",
+        &["method", "hmdist", "paper"],
+    );
+    let published = [paper::BYTES_PER_PHOTON_METHOD1, paper::BYTES_PER_PHOTON_METHOD2];
+    for ((method, _), paper) in METHODS.iter().zip(published) {
+        table.push(vec![
+            method.name().into(),
+            method.bytes_per_photon().to_string(),
+            paper.to_string(),
+        ]);
+    }
+    let files = table.write(&runner.out, "memory")?;
+    let photons = paper::LARGEST_MAP_PHOTONS as f64;
+    let megabytes = |m: PhotonMethod| photons * m.bytes_per_photon() as f64 / 1e6;
+    let notes = vec![format!(
+        "{:.2} M photons take {:.0} MB (method I) and {:.0} MB (method II); the paper needed ≈{:.0} MB.",
+        photons / 1e6,
+        megabytes(PhotonMethod::StoredDistance),
+        megabytes(PhotonMethod::NextHitPoint),
+        paper::LARGEST_MAP_MB
+    )];
+    Ok(Section {
+        name: "memory".into(),
+        tables: vec![table],
+        files,
+        notes,
+    })
+}
