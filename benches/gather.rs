@@ -13,7 +13,7 @@
 use std::time::Instant;
 
 use hmdist::accel::{Accel, BuildQuality, Kernel, TraversalStats};
-use hmdist::estimators::{DistanceClamp, EstimateContext, Estimator, GBuffer, Gather};
+use hmdist::estimators::{DistanceClamp, EstimateContext, GBuffer, Gather};
 use hmdist::progress::Silent;
 use hmdist::render::primary_hits;
 use hmdist::sampling::Weighting;

@@ -48,6 +48,7 @@ pub fn f_diff(reference: &HmdImage, test: &HmdImage, l_diag: f32) -> Result<FDif
 /// Every figure `hmdist diff` prints, over the pixels finite in both images.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Comparison {
+    /// `f_diff` (SPEC §4) and the pixels it was computed over.
     pub f_diff: FDiff,
     /// Root mean square of `H − H_ref`, in scene units.
     pub rmse: f64,

@@ -100,12 +100,16 @@ pub fn hemisphere(weighting: Weighting, u: Vec2) -> Vec3 {
 /// Basis, Revisited"): `to_world` maps local (x, y, z = normal) to world.
 #[derive(Clone, Copy, Debug)]
 pub struct Frame {
+    /// Tangent: the local x axis.
     pub t: Vec3,
+    /// Bitangent: the local y axis.
     pub b: Vec3,
+    /// The unit normal: the local z axis.
     pub n: Vec3,
 }
 
 impl Frame {
+    /// The frame around the unit normal `n`.
     #[inline]
     pub fn from_normal(n: Vec3) -> Frame {
         let sign = 1f32.copysign(n.z);
@@ -118,6 +122,7 @@ impl Frame {
         }
     }
 
+    /// Local `v` (x along `t`, y along `b`, z along `n`) in world coordinates.
     #[inline(always)]
     pub fn to_world(&self, v: Vec3) -> Vec3 {
         v.x * self.t + v.y * self.b + v.z * self.n

@@ -102,7 +102,7 @@ fn a_bare_point_on_the_slab_floor_gives_three_halves_height() {
 fn bad_points_and_keys_are_refused_by_name() {
     use hmdist::error::Error;
     let named = |r: Result<SurfacePoint, Error>, name: &str| {
-        let e = r.err().expect("refused");
+        let e = r.expect_err("refused");
         assert!(
             matches!(&e, Error::Parameter { name: Some(n), .. } if *n == name),
             "{e}"

@@ -60,6 +60,7 @@ pub enum BuildQuality {
 pub const AUTO_RAYS_PER_TRIANGLE: u64 = 500;
 
 impl BuildQuality {
+    /// The preset's name, as the CLI and the render report spell it (`fast`, `high`, `auto`).
     pub fn name(self) -> &'static str {
         match self {
             BuildQuality::Fast => "fast",
@@ -132,6 +133,7 @@ impl Accel {
         self
     }
 
+    /// The kernel that traverses the BVH.
     pub fn kernel(&self) -> Kernel {
         self.kernel
     }

@@ -53,7 +53,9 @@ impl Counter for () {}
 /// Nodes and leaf blocks visited.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct TraversalStats {
+    /// Wide nodes whose eight children were box-tested.
     pub nodes: u64,
+    /// Leaf blocks whose eight triangles were tested.
     pub blocks: u64,
 }
 

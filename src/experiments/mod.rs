@@ -127,20 +127,28 @@ pub enum Preset {
 /// The sizes and counts a preset stands for.
 #[derive(Clone, Debug)]
 pub struct PresetParams {
+    /// Image side in pixels (square images).
     pub size: u32,
+    /// Gather rays of the reference image.
     pub reference_rays: u32,
+    /// Gather ray counts of Tables 1 and 2.
     pub rays: Vec<u32>,
+    /// Photon counts of Tables 3 and 4.
     pub photons: Vec<usize>,
     /// Photons gathered per pixel (K) for Table 3 and Fig. 16/17.
     pub gathers: Vec<usize>,
     /// Photon counts of Fig. 16/17.
     pub fig16_photons: Vec<usize>,
-    /// Photons and K of Fig. 10.
-    pub fig10: (usize, usize),
+    /// Photons of Fig. 10.
+    pub fig10_photons: usize,
+    /// Photons gathered per pixel (K) of Fig. 10.
+    pub fig10_gather: usize,
+    /// Per-quadrant hemicube resolution R of Tables 1 and 2.
     pub cube_res: u32,
 }
 
 impl Preset {
+    /// The name `--preset` takes.
     pub fn name(self) -> &'static str {
         match self {
             Preset::Quick => "quick",
@@ -148,6 +156,7 @@ impl Preset {
         }
     }
 
+    /// The sizes and counts it stands for.
     pub fn params(self) -> PresetParams {
         let doubling = |from: u32, to: u32| (0..).map(move |k| from << k).take_while(move |&n| n <= to);
         match self {
@@ -158,7 +167,8 @@ impl Preset {
                 photons: vec![130_000, 260_000, 530_000, 1_060_000],
                 gathers: vec![64, 256, 1024],
                 fig16_photons: vec![260_000, 1_060_000],
-                fig10: (1_060_000, 4096),
+                fig10_photons: 1_060_000,
+                fig10_gather: 4096,
                 cube_res: 64,
             },
             Preset::Paper => PresetParams {
@@ -170,7 +180,8 @@ impl Preset {
                 ],
                 gathers: vec![64, 128, 256, 512, 1024],
                 fig16_photons: vec![1_060_000, 8_530_000],
-                fig10: (8_530_000, 65_536),
+                fig10_photons: 8_530_000,
+                fig10_gather: 65_536,
                 cube_res: 64,
             },
         }
@@ -179,8 +190,11 @@ impl Preset {
 
 /// What one experiment produced, for the report.
 pub struct Section {
+    /// The experiment's name.
     pub name: String,
+    /// Its tables, ours and the paper's.
     pub tables: Vec<Table>,
+    /// The files it wrote (tables, plots, picture grids).
     pub files: Vec<PathBuf>,
     /// Sentences on the paper's findings: reproduced or not, in numbers.
     pub notes: Vec<String>,
@@ -188,18 +202,24 @@ pub struct Section {
 
 /// Runs experiments on one scene into one folder.
 pub struct Runner<'a> {
+    /// The scene.
     pub scene: Scene,
     /// Identifies the scene in cache keys: hmdist's version, the scene's name and the
     /// fingerprint of its content.
     scene_key: String,
+    /// How much work.
     pub preset: Preset,
+    /// The preset's sizes and counts.
     pub params: PresetParams,
+    /// The output folder.
     pub out: PathBuf,
     progress: &'a dyn Progress,
+    /// What the experiments run so far produced, for the report.
     pub sections: Vec<Section>,
 }
 
 impl<'a> Runner<'a> {
+    /// A runner for the scene `scene_arg` names (built-in or file), writing into `out`.
     pub fn new(scene_arg: &str, preset: Preset, out: &Path, progress: &'a dyn Progress) -> Result<Self> {
         let scene = Scene::load(scene_arg)?;
         let scene_key = format!(

@@ -144,7 +144,7 @@ pub fn table3(runner: &Runner) -> Result<Section> {
 pub fn fig10(runner: &Runner) -> Result<Section> {
     let p = &runner.params;
     let reference = reference(runner)?;
-    let (photons, k) = p.fig10;
+    let (photons, k) = (p.fig10_photons, p.fig10_gather);
     let source = default_source(runner);
     let s = runner.scene.display_scale;
     let mut table = Table::new(

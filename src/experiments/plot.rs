@@ -10,7 +10,9 @@ use crate::image::write_atomically;
 
 /// One labelled series of (x, y) points.
 pub struct Series {
+    /// The legend's label.
     pub label: String,
+    /// (x, y) points, in order along x.
     pub points: Vec<(f64, f64)>,
 }
 

@@ -9,12 +9,16 @@ use crate::image::write_atomically;
 /// A titled table of strings; the first column names the rows.
 #[derive(Clone, Debug, Default)]
 pub struct Table {
+    /// What it shows.
     pub title: String,
+    /// Column names.
     pub header: Vec<String>,
+    /// Rows of cells, as many as the header.
     pub rows: Vec<Vec<String>>,
 }
 
 impl Table {
+    /// An empty table.
     pub fn new(title: &str, header: &[&str]) -> Self {
         Table {
             title: title.into(),
@@ -23,10 +27,12 @@ impl Table {
         }
     }
 
+    /// Adds a row.
     pub fn push(&mut self, row: Vec<String>) {
         self.rows.push(row);
     }
 
+    /// The table as CSV, header first; cells with commas or quotes quoted.
     pub fn csv(&self) -> String {
         let quote = |s: &String| {
             if s.contains([',', '"', '\n']) {
@@ -42,6 +48,7 @@ impl Table {
         out
     }
 
+    /// The table as Markdown, under its title.
     pub fn markdown(&self) -> String {
         let mut out = format!("### {}\n\n| {} |\n|", self.title, self.header.join(" | "));
         out += &"---|".repeat(self.header.len());

@@ -11,6 +11,7 @@ use crate::error::{Error as HmdError, Result};
 /// The channel name every hmdist EXR uses.
 pub const CHANNEL: &str = "Y";
 
+/// Writes `image` to the EXR file `path`, through a temporary file and a rename.
 pub fn write(image: &HmdImage, path: &Path) -> Result<()> {
     write_atomically(path, &encode(image, path)?)
 }

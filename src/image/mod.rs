@@ -17,12 +17,17 @@ use crate::error::{Error, Result};
 /// H per pixel.
 #[derive(Clone, Debug, PartialEq)]
 pub struct HmdImage {
+    /// Columns of pixels.
     pub width: u32,
+    /// Rows of pixels.
     pub height: u32,
+    /// H per pixel, row-major, row 0 at the top: `width · height` values.
     pub data: Vec<f32>,
 }
 
 impl HmdImage {
+    /// An image of `data` (row-major, row 0 at the top); panics unless it holds
+    /// `width · height` values.
     pub fn new(width: u32, height: u32, data: Vec<f32>) -> Self {
         assert_eq!(
             data.len(),
@@ -32,6 +37,7 @@ impl HmdImage {
         HmdImage { width, height, data }
     }
 
+    /// H at pixel (x, y), row 0 at the top.
     pub fn at(&self, x: u32, y: u32) -> f32 {
         self.data[y as usize * self.width as usize + x as usize]
     }
@@ -75,6 +81,8 @@ pub struct OutputSet {
 }
 
 impl OutputSet {
+    /// Creates the temporary of each of `paths`: a path named twice, a directory or a file that
+    /// cannot be created is an error.
     pub fn reserve(paths: &[&Path]) -> Result<OutputSet> {
         let mut set = OutputSet { files: vec![] };
         for (i, &path) in paths.iter().enumerate() {

@@ -22,6 +22,7 @@ pub fn grey(image: &HmdImage, scale: f32) -> GrayImage {
     })
 }
 
+/// Writes `picture` to the PNG file `path`, through a temporary file and a rename.
 pub fn write_png(picture: &GrayImage, path: &Path) -> Result<()> {
     write_atomically(path, &encode_png(picture, path)?)
 }

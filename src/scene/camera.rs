@@ -12,9 +12,13 @@ use crate::error::{Error, Result};
 /// Where the camera is and what it sees. `fov_y_deg` is the full vertical field of view.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
+    /// The pinhole: where every primary ray starts.
     pub eye: Vec3,
+    /// A point on the view axis: the camera looks along `target − eye`.
     pub target: Vec3,
+    /// The world's up direction; need not be perpendicular to the view direction (`u = r × f`).
     pub up: Vec3,
+    /// Full vertical field of view, in degrees.
     pub fov_y_deg: f32,
 }
 
@@ -75,6 +79,7 @@ impl Camera {
 }
 
 impl CameraRays {
+    /// The camera's position, where every primary ray starts.
     pub fn eye(&self) -> Vec3 {
         self.eye
     }

@@ -10,16 +10,21 @@ use crate::error::{Error, Result};
 /// An axis-aligned bounding box.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bounds {
+    /// The corner with the smallest coordinates.
     pub min: Vec3,
+    /// The corner with the largest coordinates.
     pub max: Vec3,
 }
 
 impl Bounds {
+    /// Bounds of no point (`min = +inf`, `max = −inf`): the first [`Bounds::grow`] sets both
+    /// corners.
     pub const EMPTY: Bounds = Bounds {
         min: Vec3::INFINITY,
         max: Vec3::NEG_INFINITY,
     };
 
+    /// Grows the box to hold `p`.
     pub fn grow(&mut self, p: Vec3) {
         self.min = self.min.min(p);
         self.max = self.max.max(p);
@@ -30,6 +35,7 @@ impl Bounds {
         (self.max - self.min).length()
     }
 
+    /// The centre of the box.
     pub fn center(&self) -> Vec3 {
         0.5 * (self.min + self.max)
     }
@@ -38,15 +44,19 @@ impl Bounds {
 /// A triangle soup with shared vertices: `indices[i]` names the three corners of triangle `i`.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
+    /// Vertex positions, in scene units.
     pub positions: Vec<Vec3>,
+    /// Per triangle, the indices of its three corners in `positions`.
     pub indices: Vec<[u32; 3]>,
 }
 
 impl Mesh {
+    /// An empty mesh.
     pub fn new() -> Self {
         Self::default()
     }
 
+    /// The number of triangles.
     pub fn triangle_count(&self) -> usize {
         self.indices.len()
     }
@@ -63,6 +73,7 @@ impl Mesh {
         first
     }
 
+    /// Adds the triangle with corners `a`, `b`, `c` (indices into `positions`).
     pub fn add_triangle(&mut self, a: u32, b: u32, c: u32) {
         self.indices.push([a, b, c]);
     }
@@ -84,6 +95,7 @@ impl Mesh {
             .extend(other.indices.iter().map(|t| t.map(|v| v + offset)));
     }
 
+    /// Moves every vertex by `transform`.
     pub fn transform(&mut self, transform: Affine3A) {
         for p in &mut self.positions {
             *p = transform.transform_point3(*p);

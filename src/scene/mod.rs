@@ -24,7 +24,9 @@ use crate::error::Result;
 pub struct Scene {
     /// A short name for reports: the built-in name or the file name.
     pub name: String,
+    /// The triangles, in scene units.
     pub mesh: Mesh,
+    /// The camera the HMD image is rendered from.
     pub camera: Camera,
     /// The spot light for light-sourced photons, where the scene has one.
     pub light: Option<SpotLight>,
@@ -50,6 +52,7 @@ impl Scene {
         self.camera.validate()
     }
 
+    /// Bounds of the vertices that triangles use ([`Mesh::bounds`]).
     pub fn bounds(&self) -> Bounds {
         self.mesh.bounds()
     }

@@ -35,8 +35,10 @@ pub enum Kernel {
 }
 
 impl Kernel {
+    /// Every kernel, whether this CPU can run it or not.
     pub const ALL: [Kernel; 3] = [Kernel::Scalar, Kernel::Avx2, Kernel::Avx512];
 
+    /// The kernel's name, as `HMDIST_KERNEL` and the render report spell it.
     pub fn name(self) -> &'static str {
         match self {
             Kernel::Scalar => "scalar",
@@ -80,6 +82,8 @@ impl Kernel {
         }
     }
 
+    /// The kernel named `name` (`scalar`, `avx2`, `avx512`); an unknown name, or a kernel this
+    /// CPU cannot run, is an error.
     pub fn parse(name: &str) -> Result<Kernel> {
         let kernel = Kernel::ALL
             .into_iter()

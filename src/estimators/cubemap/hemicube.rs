@@ -12,13 +12,19 @@ use glam::Vec3;
 /// The five faces, in texel-index order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Face {
+    /// Axis +z (the normal): `2R × 2R` texels.
     Top,
+    /// Axis +x (the tangent `t`): `2R × R` texels.
     PosX,
+    /// Axis −x: `2R × R` texels.
     NegX,
+    /// Axis +y (the bitangent `b`): `2R × R` texels.
     PosY,
+    /// Axis −y: `2R × R` texels.
     NegY,
 }
 
+/// All five faces, in texel-index order.
 pub const FACES: [Face; 5] = [Face::Top, Face::PosX, Face::NegX, Face::PosY, Face::NegY];
 
 impl Face {
@@ -49,6 +55,7 @@ impl Face {
 /// A hemicube of per-quadrant resolution `R`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Hemicube {
+    /// `R`: texels across half a face; the top face is `2R × 2R`, each side face `2R × R`.
     pub resolution: u32,
 }
 

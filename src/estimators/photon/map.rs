@@ -32,6 +32,7 @@ pub enum PhotonMethod {
 }
 
 impl PhotonMethod {
+    /// The name the CLI and the report use (`photon1`, `photon2`).
     pub fn name(self) -> &'static str {
         match self {
             PhotonMethod::StoredDistance => "photon1",

@@ -66,7 +66,9 @@ pub struct PhotonParams {
     pub photons: usize,
     /// Nearest photons gathered per pixel `K`.
     pub gather: usize,
+    /// Where paths start.
     pub source: SourceKind,
+    /// When paths end: bounce limit and absorption.
     pub rules: PathRules,
     /// Gather only within this distance of the pixel (`None`: no limit).
     pub max_radius: Option<f32>,

@@ -43,15 +43,21 @@ pub struct PathRules {
 /// (`+inf` if it escaped).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TracedPhoton {
+    /// Where the bounce starts: a surface point, in scene units.
     pub position: Vec3,
+    /// The surface's unit normal there, facing the side the path arrived from.
     pub normal: Vec3,
+    /// The unit direction the path leaves in.
     pub direction: Vec3,
+    /// Distance along `direction` to the next hit, in scene units; `+inf` if it escaped.
     pub distance: f32,
 }
 
 /// The photons of one tracing run, in path order, and its counts.
 pub struct PhotonTrace {
+    /// The stored photons, in path order.
     pub photons: Vec<TracedPhoton>,
+    /// Paths traced until the budget was filled, those that missed the scene included.
     pub paths_traced: u64,
     /// Stored photons whose continuation escaped the scene.
     pub escaped: u64,

@@ -24,8 +24,11 @@ use crate::scene::{default_display_scale, framing_camera, Camera, Mesh, Scene, S
 /// carry them (glTF). Positions are in the file's world space (node transforms applied).
 #[derive(Clone, Debug, Default)]
 pub struct MeshFile {
+    /// The triangles, in world space.
     pub mesh: Mesh,
+    /// The first perspective camera of a glTF file; `None` for OBJ and PLY.
     pub camera: Option<Camera>,
+    /// The first spot light of a glTF file (`KHR_lights_punctual`); `None` for OBJ and PLY.
     pub light: Option<SpotLight>,
 }
 

@@ -14,8 +14,12 @@ use glam::Vec3;
 use super::shapes;
 use crate::scene::{Camera, Mesh, Scene};
 
+/// Radius `R` of the built-in `sphere` scene: `H = R` everywhere (cosine weighting).
 pub const SPHERE_RADIUS: f32 = 2.5;
+/// Floor-to-ceiling height `h` of the built-in `slab` scene: `H = 3h/2` (cosine), `2h`
+/// (uniform) on the floor far from the edges.
 pub const SLAB_HEIGHT: f32 = 1.0;
+/// Radius `R` of the built-in `dome` scene: `H = R` at the centre of the floor.
 pub const DOME_RADIUS: f32 = 2.0;
 
 /// The inside of an icosphere of radius `radius`, subdivided `subdivisions` times

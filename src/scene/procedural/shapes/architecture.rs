@@ -89,11 +89,13 @@ pub fn straight_balustrade(from: Vec3, to: Vec3, height: f32, spacing: f32) -> M
 /// with a nosing, thin risers, a slanted stringer and a balustrade on each side.
 #[derive(Clone, Copy, Debug)]
 pub struct Staircase {
+    /// Number of steps.
     pub steps: usize,
     /// Height of one step.
     pub rise: f32,
     /// Depth of one tread.
     pub run: f32,
+    /// Width of the treads, along x.
     pub width: f32,
     /// Height of the handrail above the treads' front edges.
     pub rail_height: f32,
@@ -105,6 +107,7 @@ impl Staircase {
         Vec3::new(0.0, self.steps as f32 * self.rise, self.steps as f32 * self.run)
     }
 
+    /// The treads and risers, both stringers and both balustrades.
     pub fn mesh(&self) -> Mesh {
         let mut mesh = Mesh::new();
         for step in 0..self.steps {

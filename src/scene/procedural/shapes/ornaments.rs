@@ -16,7 +16,9 @@ use crate::scene::Mesh;
 /// through its hole.
 #[derive(Clone, Copy, Debug)]
 pub struct TorusKnot {
+    /// Turns around the torus's axis (y).
     pub p: u32,
+    /// Turns through the torus's hole.
     pub q: u32,
     /// Radius of the torus's core circle.
     pub radius: f32,
