@@ -70,3 +70,8 @@ pub mod render;
 pub mod report;
 pub mod sampling;
 pub mod scene;
+
+/// The README's Rust examples, run as doctests so that they stay true.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeExamples;

@@ -71,6 +71,35 @@ impl RenderReport {
         self.seconds.total += seconds;
     }
 
+    /// One line on what was rendered and what it cost, as `hmdist render` prints it.
+    pub fn summary(&self) -> String {
+        let r = self;
+        let p = &r.parameters;
+        let rays = p.rays.unwrap_or(0);
+        let what = match (&r.details.cubemap, &r.details.photon, &p.photon, &p.cubemap) {
+            (Some(c), _, _, Some(cp)) => {
+                format!("{rays} rays/pixel, R = {}, {} backend", cp.cube_res, c.backend)
+            }
+            (_, Some(d), Some(pp), _) => format!(
+                "{} photons, K = {}, {} holes, {:.0} queries/s",
+                d.photons_stored, pp.gather, d.holes, d.gather_queries_per_s
+            ),
+            _ => format!(
+                "{rays} rays/pixel, {:.2} Mrays/s",
+                r.mrays_per_s.unwrap_or(f64::NAN)
+            ),
+        };
+        // The cube map's rays fill texels; its directions are the lookups.
+        let escaped = match &r.details.cubemap {
+            Some(c) => c.escaped_lookups.to_string(),
+            None => r.escaped_rays.map_or("null".into(), |e| e.to_string()),
+        };
+        format!(
+            "{}: {}x{} {} ({what}): {:.2} s, {escaped} escaped, {} background",
+            r.scene, r.width, r.height, r.method, r.seconds.total, r.background_pixels
+        )
+    }
+
     /// The report as pretty-printed JSON.
     pub fn to_json(&self) -> String {
         serde_json::to_string_pretty(self).expect("a report serialises")

@@ -2,7 +2,7 @@
 //!
 //! Guarantees every estimator relies on:
 //! - **Watertight**: a ray cannot slip between two triangles that share an edge
-//!   ([`triangle`]), and BVH boxes are tested conservatively ([`kernel`]). In a closed room no
+//!   (`triangle.rs`), and BVH boxes are tested conservatively (`kernel/`). In a closed room no
 //!   ray escapes.
 //! - **Robust origins**: a ray leaving a surface starts at [`offset_ray_origin`] of the hit,
 //!   and hits closer than their own `t` error bound (whose sign cannot be trusted) are
@@ -18,8 +18,8 @@
 //!   hit distances bit for bit, and so the same images; `HMDIST_KERNEL` forces one.
 //!
 //! The interface is [`RayCaster`]: no per-ray allocation and no dynamic dispatch; estimators
-//! are generic over it. [`Accel`] is the implementation: an 8-wide BVH ([`wide`]) traversed
-//! nearest child first ([`traverse`]) by SIMD kernels chosen at run time ([`kernel`]).
+//! are generic over it. [`Accel`] is the implementation: an 8-wide BVH (`wide.rs`) traversed
+//! nearest child first (`traverse.rs`) by SIMD kernels chosen at run time (`kernel/`).
 //! Distances are in scene units; directions must be unit length for `t` to be a distance.
 
 mod bvh;

@@ -12,7 +12,6 @@ use hmdist::error::{Error, Result};
 use hmdist::estimators::registry::{self, MethodConfig, METHODS};
 use hmdist::image::{exr, picture, OutputSet};
 use hmdist::render::{render, RenderOptions, DEFAULT_SEED};
-use hmdist::report::RenderReport;
 use hmdist::scene::Scene;
 
 use super::bar::Bar;
@@ -104,35 +103,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     outputs.commit(&[&exr_bytes, &png_bytes, rendered.report.to_json().as_bytes()])?;
     if !args.quiet {
         let files = format!("{}, {}, {}", args.out.display(), png.display(), json.display());
-        println!("{} -> {files}", summary(&rendered.report));
+        println!("{} -> {files}", rendered.report.summary());
     }
     Ok(())
-}
-
-/// One line on what was rendered and what it cost.
-fn summary(r: &RenderReport) -> String {
-    let p = &r.parameters;
-    let rays = p.rays.unwrap_or(0);
-    let what = match (&r.details.cubemap, &r.details.photon, &p.photon, &p.cubemap) {
-        (Some(c), _, _, Some(cp)) => {
-            format!("{rays} rays/pixel, R = {}, {} backend", cp.cube_res, c.backend)
-        }
-        (_, Some(d), Some(pp), _) => format!(
-            "{} photons, K = {}, {} holes, {:.0} queries/s",
-            d.photons_stored, pp.gather, d.holes, d.gather_queries_per_s
-        ),
-        _ => format!(
-            "{rays} rays/pixel, {:.2} Mrays/s",
-            r.mrays_per_s.unwrap_or(f64::NAN)
-        ),
-    };
-    // The cube map's rays fill texels; its directions are the lookups.
-    let escaped = match &r.details.cubemap {
-        Some(c) => c.escaped_lookups.to_string(),
-        None => r.escaped_rays.map_or("null".into(), |e| e.to_string()),
-    };
-    format!(
-        "{}: {}x{} {} ({what}): {:.2} s, {escaped} escaped, {} background",
-        r.scene, r.width, r.height, r.method, r.seconds.total, r.background_pixels
-    )
 }

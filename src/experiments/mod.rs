@@ -8,8 +8,8 @@
 //! scene's content is its [`Scene::fingerprint`], so editing any file it was loaded from (a
 //! TOML scene's meshes included) renders again.
 //!
-//! The experiments are listed once, in [`EXPERIMENTS`]: the ray studies ([`rays`]: Tables
-//! 1–2, Fig. 9) and the photon studies ([`photons`]: Tables 3–4, Fig. 10, 16/17, memory).
+//! The experiments are listed once, in [`EXPERIMENTS`]: the ray studies (`rays.rs`: Tables
+//! 1–2, Fig. 9) and the photon studies (`photons.rs`: Tables 3–4, Fig. 10, 16/17, memory).
 //! The paper's published numbers are in [`paper`].
 
 mod grid;
