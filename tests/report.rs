@@ -131,7 +131,7 @@ fn photon_methods_count_the_rays_of_their_paths_and_have_no_gather_rays() {
     // The light's cone lands on the floor, so every emission ray hits it; a photon stored
     // there leaves upwards and escapes, which ends its path: one photon per path at most.
     let dir = floor_scene("report-photon");
-    for (method, bytes) in [("photon1", 24), ("photon2", 32)] {
+    for (method, bytes) in [("photon1", 20), ("photon2", 28)] {
         let r = report(&dir, method, &["--method", method]).unwrap();
         assert_common_keys(&r, method, &["photon_trace", "photon_index", "gather"]);
         assert_null(&r, "rays");

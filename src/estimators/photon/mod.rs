@@ -21,7 +21,7 @@ use crate::accel::Hit;
 use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::report::{Details, Parameters, PhaseSeconds, PhotonDetails, PhotonParameters};
-pub use map::{PhotonMap, PhotonMethod};
+pub use map::{GatherScratch, PhotonMap, PhotonMethod};
 pub use trace::{trace_photons, PathRules, PhotonSource, PhotonTrace, TracedPhoton};
 
 /// Default stored photons `P` (paper: 130 K … 8.53 M).
@@ -275,7 +275,10 @@ impl PixelWork for PhotonPixels<'_> {
     }
 
     fn worker(&self) -> Box<dyn PixelWorker + '_> {
-        Box::new(PhotonWorker(self))
+        Box::new(PhotonWorker {
+            pixels: self,
+            scratch: GatherScratch::default(),
+        })
     }
 
     fn details(&self, pass: &PixelPass) -> Details {
@@ -293,17 +296,23 @@ impl PixelWork for PhotonPixels<'_> {
     }
 }
 
-/// A thread's view of [`PhotonPixels`]: the gather needs no scratch.
-struct PhotonWorker<'a>(&'a PhotonPixels<'a>);
+/// A thread's view of [`PhotonPixels`], with its gather buffers; consecutive pixels of a row
+/// start each search from the previous one's radius.
+struct PhotonWorker<'a> {
+    pixels: &'a PhotonPixels<'a>,
+    scratch: GatherScratch,
+}
 
 impl PixelWorker for PhotonWorker<'_> {
     fn pixel(&mut self, hit: &Hit, _: u64, _: &mut Tally) -> f32 {
-        let w = self.0;
+        let w = self.pixels;
         let max_radius = w.estimator.params.max_radius.unwrap_or(f32::INFINITY);
+        let clamp = w.context.clamp;
         let mut mean = HarmonicMean::default();
+        let (x, n) = (hit.point, hit.normal);
         w.map
-            .gather(hit.point, hit.normal, w.k, max_radius, NORMAL_FILTER_COS, |d| {
-                mean.add(d, w.context.clamp)
+            .gather(&mut self.scratch, x, n, w.k, max_radius, NORMAL_FILTER_COS, |d| {
+                mean.add(d, clamp)
             });
         mean.value()
     }
