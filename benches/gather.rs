@@ -83,6 +83,7 @@ fn throughput(accel: &Accel, scene: &Scene, gbuffer: &GBuffer, rays: u32) -> (f6
         scene,
         seed: 1,
         clamp: DistanceClamp::for_diagonal(scene.diagonal(), None),
+        aovs: &[],
     };
     let gather = Gather::new(rays, Weighting::Cosine).unwrap();
     let mut figures = [0.0; 2];

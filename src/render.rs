@@ -12,7 +12,8 @@ use rayon::prelude::*;
 use crate::accel::{Accel, BuildQuality, Kernel, RayCaster};
 use crate::error::{Error, Result};
 use crate::estimators::{
-    DistanceClamp, Estimate, EstimateContext, Estimator, GBuffer, PixelPass, PixelWork, RayCount, Tally, Work,
+    Aov, AovImage, AovSample, DistanceClamp, Estimate, EstimateContext, Estimator, GBuffer, PixelPass,
+    PixelWork, PixelWorker, RayCount, Tally, Work,
 };
 use crate::image::HmdImage;
 use crate::progress::Progress;
@@ -42,6 +43,8 @@ pub struct RenderOptions {
     pub max_distance: Option<f32>,
     /// The BVH preset.
     pub bvh_quality: BuildQuality,
+    /// AOVs to measure beside H, each an EXR channel (SPEC §8).
+    pub aovs: Vec<Aov>,
 }
 
 impl Default for RenderOptions {
@@ -53,6 +56,7 @@ impl Default for RenderOptions {
             threads: None,
             max_distance: None,
             bvh_quality: BuildQuality::default(),
+            aovs: vec![],
         }
     }
 }
@@ -101,6 +105,8 @@ pub(crate) fn in_pool<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + S
 pub struct Rendered {
     /// H per pixel.
     pub image: HmdImage,
+    /// The AOVs asked for, in that order.
+    pub aovs: Vec<AovImage>,
     /// Parameters, statistics and timings; `seconds.load` is 0 until the caller that loaded
     /// the scene adds it ([`RenderReport::add_load_seconds`]).
     pub report: RenderReport,
@@ -115,6 +121,10 @@ pub fn render(
 ) -> Result<Rendered> {
     options.validate()?;
     scene.validate()?;
+    if let Some(aov) = options.aovs.iter().find(|a| !estimator.aovs().contains(a)) {
+        let message = format!("{} is not measured by {}", aov.name(), estimator.method());
+        return Err(Error::invalid("aov", message));
+    }
     in_pool(options.threads, || {
         render_in_pool(scene, estimator, options, progress)
     })?
@@ -147,6 +157,7 @@ fn render_in_pool(
         scene,
         seed: options.seed,
         clamp: DistanceClamp::for_diagonal(l_diag, options.max_distance),
+        aovs: &options.aovs,
     };
     let estimate_start = Instant::now();
     let estimate = estimate(estimator, &context, &gbuffer, progress)?;
@@ -195,11 +206,16 @@ fn render_in_pool(
             total: start.elapsed().as_secs_f64(),
             phases: estimate.phases,
         },
+        channels: std::iter::once("Y")
+            .chain(options.aovs.iter().map(|a| a.name()))
+            .map(String::from)
+            .collect(),
         parameters: estimator.parameters(),
         details: estimate.details,
     };
     Ok(Rendered {
         image: HmdImage::new(options.width, options.height, estimate.hmd),
+        aovs: estimate.aovs,
         report,
     })
 }
@@ -215,7 +231,7 @@ pub fn estimate(
     Ok(match estimator.prepare(context, gbuffer, progress)? {
         Work::Done(estimate) => estimate,
         Work::Pixels { work, phases, rays } => {
-            let (hmd, pass) = pixel_pass(work.as_ref(), gbuffer, progress);
+            let (hmd, aovs, pass) = pixel_pass(work.as_ref(), gbuffer, context.aovs, progress);
             let mut phases = phases;
             work.record_phase(&mut phases, pass.seconds);
             let pixel_rays = work.casts_rays().then_some(RayCount {
@@ -225,6 +241,7 @@ pub fn estimate(
             });
             Estimate {
                 hmd,
+                aovs,
                 rays: rays.or(pixel_rays),
                 phases,
                 details: work.details(&pass),
@@ -234,39 +251,82 @@ pub fn estimate(
 }
 
 /// The driver's loop over the estimator's pixels: rows in parallel, one worker (with its
-/// scratch) per rayon job, NaN for background, holes counted. The image does not depend on
-/// how rows are split among threads.
-fn pixel_pass(work: &dyn PixelWork, gbuffer: &GBuffer, progress: &dyn Progress) -> (Vec<f32>, PixelPass) {
+/// scratch) per rayon job, NaN for background, holes counted, the AOVs in `aovs` kept. The
+/// image does not depend on how rows are split among threads.
+pub(crate) fn pixel_pass(
+    work: &dyn PixelWork,
+    gbuffer: &GBuffer,
+    aovs: &[Aov],
+    progress: &dyn Progress,
+) -> (Vec<f32>, Vec<AovImage>, PixelPass) {
     let start = Instant::now();
     let width = gbuffer.width as usize;
     let mut hmd = vec![f32::NAN; gbuffer.points.len()];
+    // Each pixel's AOVs, only where some are asked for.
+    let mut samples = vec![AovSample::default(); if aovs.is_empty() { 0 } else { hmd.len() }];
     progress.start(work.label(), gbuffer.height as u64);
-    let tally = hmd
-        .par_chunks_mut(width)
-        .zip(gbuffer.points.par_chunks(width))
-        .enumerate()
-        .map_init(
-            || work.worker(),
-            |worker, (row, (out, points))| {
-                let mut tally = Tally::default();
-                for (x, (h, point)) in out.iter_mut().zip(points).enumerate() {
-                    if let Some(hit) = point {
-                        *h = worker.pixel(hit, (row * width + x) as u64, &mut tally);
-                        tally.holes += h.is_nan() as u64;
-                    }
-                }
-                progress.advance(1);
-                tally
-            },
-        )
-        .reduce(Tally::default, |a, b| a + b);
+    let rows = hmd.par_chunks_mut(width).zip(gbuffer.points.par_chunks(width));
+    let tally = if aovs.is_empty() {
+        rows.enumerate()
+            .map_init(
+                || work.worker(),
+                |worker, (row, (out, points))| {
+                    let tally = pixel_row(worker.as_mut(), row * width, out, points, None);
+                    progress.advance(1);
+                    tally
+                },
+            )
+            .reduce(Tally::default, |a, b| a + b)
+    } else {
+        rows.zip(samples.par_chunks_mut(width))
+            .enumerate()
+            .map_init(
+                || work.worker(),
+                |worker, (row, ((out, points), samples))| {
+                    let tally = pixel_row(worker.as_mut(), row * width, out, points, Some(samples));
+                    progress.advance(1);
+                    tally
+                },
+            )
+            .reduce(Tally::default, |a, b| a + b)
+    };
     progress.finish();
     let pass = PixelPass {
         tally,
         pixels: gbuffer.surface_pixels(),
         seconds: start.elapsed().as_secs_f64(),
     };
-    (hmd, pass)
+    let channels = aovs
+        .iter()
+        .map(|&aov| AovImage {
+            aov,
+            data: samples.iter().map(|s| s.get(aov)).collect(),
+        })
+        .collect();
+    (hmd, channels, pass)
+}
+
+/// One row of the pixel pass, whose first pixel has index `first`.
+fn pixel_row(
+    worker: &mut dyn PixelWorker,
+    first: usize,
+    out: &mut [f32],
+    points: &[Option<crate::accel::Hit>],
+    mut samples: Option<&mut [AovSample]>,
+) -> Tally {
+    let mut tally = Tally::default();
+    let mut scratch = AovSample::default();
+    for (x, (h, point)) in out.iter_mut().zip(points).enumerate() {
+        if let Some(hit) = point {
+            let aov = match samples.as_deref_mut() {
+                Some(samples) => &mut samples[x],
+                None => &mut scratch,
+            };
+            *h = worker.pixel(hit, (first + x) as u64, &mut tally, aov);
+            tally.holes += h.is_nan() as u64;
+        }
+    }
+    tally
 }
 
 /// Each pixel's first hit along its camera ray (SPEC §2), normal flipped to face the camera.

@@ -55,6 +55,8 @@ pub struct RenderReport {
     pub mrays_per_s: Option<f64>,
     /// Seconds per phase.
     pub seconds: Seconds,
+    /// The EXR's channels: `Y` (H), then the AOVs asked for.
+    pub channels: Vec<String>,
     /// The method's parameters.
     #[serde(flatten)]
     pub parameters: Parameters,
@@ -77,6 +79,12 @@ impl RenderReport {
         let p = &r.parameters;
         let rays = p.rays.unwrap_or(0);
         let what = match (&r.details.cubemap, &r.details.photon, &p.photon, &p.cubemap) {
+            _ if p.adaptive.is_some() => format!(
+                "tolerance {}, {:.1} rays/pixel on average, {:.2} Mrays/s",
+                p.adaptive.as_ref().map_or(f32::NAN, |a| a.tolerance),
+                r.details.mean_rays_per_pixel.unwrap_or(f64::NAN),
+                r.mrays_per_s.unwrap_or(f64::NAN)
+            ),
             (Some(c), _, _, Some(cp)) => {
                 format!("{rays} rays/pixel, R = {}, {} backend", cp.cube_res, c.backend)
             }
@@ -195,6 +203,22 @@ pub struct Parameters {
     /// `photon1` and `photon2`.
     #[serde(flatten)]
     pub photon: Option<PhotonParameters>,
+    /// `adaptive`.
+    #[serde(flatten)]
+    pub adaptive: Option<AdaptiveParameters>,
+}
+
+/// When adaptive gathering stops.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AdaptiveParameters {
+    /// A pixel stops once the relative standard error of its H is below this.
+    pub tolerance: f32,
+    /// Rays before the first check (8 rounds).
+    pub min_rays: u32,
+    /// A pixel never casts more.
+    pub max_rays: u32,
+    /// Rays per round.
+    pub rays_per_round: u32,
 }
 
 /// The gather directions.
@@ -202,8 +226,11 @@ pub struct Parameters {
 pub struct GatherParameters {
     /// Direction weighting.
     pub weighting: Weighting,
-    /// The stratification grid `a × b` (a · b = N).
+    /// The stratification grid `a × b` of one round (a · b = N / rounds).
     pub strata: [u32; 2],
+    /// Independent rounds the rays are cast in (1: one grid); adaptive: the rounds before
+    /// its first check.
+    pub rounds: u32,
 }
 
 /// The hemicube.
@@ -235,6 +262,12 @@ pub struct PhotonParameters {
 /// A method's own figures; each group is there for the methods that measure it.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct Details {
+    /// The `ao` AOV's radius, where it was computed (given, or the median of H).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub ao_radius: Option<f32>,
+    /// `adaptive`: rays cast per surface pixel, on average.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub mean_rays_per_pixel: Option<f64>,
     /// `cubemap`.
     #[serde(flatten)]
     pub cubemap: Option<CubemapDetails>,

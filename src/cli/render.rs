@@ -10,6 +10,7 @@ use clap::Args;
 use hmdist::accel::BuildQuality;
 use hmdist::error::{Error, Result};
 use hmdist::estimators::registry::{self, MethodConfig, METHODS};
+use hmdist::estimators::Aov;
 use hmdist::image::{exr, picture, OutputSet};
 use hmdist::render::{render, RenderOptions, DEFAULT_SEED};
 use hmdist::scene::Scene;
@@ -53,6 +54,20 @@ pub struct RenderArgs {
     /// Display scale s of the PNG [default: the scene's own].
     #[arg(long)]
     scale: Option<f32>,
+    /// AOVs to add as EXR channels beside Y, comma-separated: relerr (relative standard error
+    /// of H), rays (rays cast), dmin (smallest hit distance), ao (ambient occlusion within
+    /// --ao-radius), escaped (fraction of rays that escaped).
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        value_name = "LIST",
+        help_heading = "AOVs and adaptive"
+    )]
+    aov: Vec<Aov>,
+    /// A false-colour PNG of an AOV, with a legend (repeatable); adds the AOV if not asked for.
+    #[arg(long, num_args = 2, value_names = ["NAME", "FILE"], help_heading = "AOVs and adaptive")]
+    png_aov: Vec<String>,
     /// No progress bar and no summary line.
     #[arg(long)]
     quiet: bool,
@@ -67,7 +82,18 @@ fn method_names() -> clap::builder::PossibleValuesParser {
 }
 
 pub fn run(args: RenderArgs) -> Result<()> {
-    let estimator = registry::build(&args.method, &args.config)?;
+    let mut aovs = args.aov.clone();
+    let mut pictures = vec![];
+    for pair in args.png_aov.chunks(2) {
+        let aov = Aov::parse(&pair[0])?;
+        if !aovs.contains(&aov) {
+            aovs.push(aov);
+        }
+        pictures.push((aov, PathBuf::from(&pair[1])));
+    }
+    aovs.dedup();
+    let config = args.config.clone().for_aovs(&aovs);
+    let estimator = registry::build(&args.method, &config)?;
     let options = RenderOptions {
         width: args.size.0,
         height: args.size.1,
@@ -75,6 +101,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         threads: args.threads,
         max_distance: args.max_distance,
         bvh_quality: args.bvh,
+        aovs,
     };
     options.validate()?;
     if let Some(s) = args.scale.filter(|s| !(s.is_finite() && *s > 0.0)) {
@@ -86,7 +113,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let png = args.png.unwrap_or_else(|| args.out.with_extension("png"));
     let json = args.json.unwrap_or_else(|| args.out.with_extension("json"));
     // Fails now, before a long render, if an output cannot be written.
-    let outputs = OutputSet::reserve(&[&args.out, &png, &json])?;
+    let mut paths: Vec<&std::path::Path> = vec![&args.out, &png, &json];
+    paths.extend(pictures.iter().map(|(_, path)| path.as_path()));
+    let outputs = OutputSet::reserve(&paths)?;
 
     let bar = Bar::new(args.quiet);
     bar.status("loading");
@@ -98,9 +127,18 @@ pub fn run(args: RenderArgs) -> Result<()> {
     rendered.report.add_load_seconds(load_seconds);
 
     let scale = args.scale.unwrap_or(scene.display_scale);
-    let exr_bytes = exr::encode(&rendered.image, &args.out)?;
+    let exr_bytes = exr::encode(&rendered.image, &rendered.aovs, &args.out)?;
     let png_bytes = picture::encode_png(&picture::grey(&rendered.image, scale), &png)?;
-    outputs.commit(&[&exr_bytes, &png_bytes, rendered.report.to_json().as_bytes()])?;
+    let mut contents = vec![exr_bytes, png_bytes, rendered.report.to_json().into_bytes()];
+    for (aov, path) in &pictures {
+        let channel = rendered.aovs.iter().find(|c| c.aov == *aov).expect("asked for");
+        let (w, h) = (rendered.image.width, rendered.image.height);
+        contents.push(picture::encode_png(
+            &picture::false_colour(&channel.data, w, h, aov.name()),
+            path,
+        )?);
+    }
+    outputs.commit(&contents.iter().map(|c| c.as_slice()).collect::<Vec<_>>())?;
     if !args.quiet {
         let files = format!("{}, {}, {}", args.out.display(), png.display(), json.display());
         println!("{} -> {files}", rendered.report.summary());

@@ -5,11 +5,20 @@
 //! Random numbers are keyed by (seed, key, ray index), the key being the pixel index in an
 //! image, so the image is the same whatever the thread count or tiling; and H at a list of
 //! points ([`crate::points`]) keyed by pixel index is the image's H.
+//!
+//! **Rounds.** With `rounds` R > 1 the N rays are cast as R independent rounds, each its own
+//! jittered stratified grid of N/R rays (ray indices continue from round to round, so R = 1
+//! is the single grid). H is still `N / Σ 1/d` over all rays; the spread of the rounds' means
+//! of `1/d` gives its standard error (batch means: each round is an unbiased estimate of the
+//! mean of `1/d`, and rounds are independent, so their sample variance over R is the variance
+//! of the overall mean; the plain sample variance of the N stratified rays would overstate
+//! it). The relative standard error of H is that of the mean of `1/d` (delta method).
 
 use glam::Vec3;
 
 use super::{
-    EstimateContext, Estimator, GBuffer, HarmonicMean, PixelPass, PixelWork, PixelWorker, Tally, Work,
+    Aov, AovSample, DistanceClamp, EstimateContext, Estimator, GBuffer, HarmonicMean, PixelPass, PixelWork,
+    PixelWorker, Tally, Work,
 };
 use crate::accel::{Hit, RayCaster};
 use crate::error::{Error, Result};
@@ -27,7 +36,12 @@ pub const DEFAULT_RAYS: u32 = 64;
 pub struct Gather {
     rays: u32,
     weighting: Weighting,
+    rounds: u32,
+    ao_radius: Option<f32>,
 }
+
+/// Rounds of gather rays when the `relerr` AOV is asked for and no rounds are named.
+pub const DEFAULT_ERROR_ROUNDS: u32 = 8;
 
 /// A gather's start: the origin offset off the surface, the normal whose hemisphere is
 /// sampled, and the triangle the rays leave (`None` where it is not known).
@@ -55,7 +69,38 @@ impl Gather {
         if rays == 0 {
             return Err(Error::invalid("rays", "must be at least 1, not 0"));
         }
-        Ok(Gather { rays, weighting })
+        Ok(Gather {
+            rays,
+            weighting,
+            rounds: 1,
+            ao_radius: None,
+        })
+    }
+
+    /// The same rays cast as `rounds` independent rounds of `rays / rounds` rays each, for
+    /// the `relerr` AOV; `rounds` must divide the rays.
+    pub fn with_rounds(self, rounds: u32) -> Result<Self> {
+        if rounds == 0 || !self.rays.is_multiple_of(rounds) {
+            let message = format!(
+                "must divide the rays ({}) into whole rounds, not {rounds}",
+                self.rays
+            );
+            return Err(Error::invalid("rounds", message));
+        }
+        Ok(Gather { rounds, ..self })
+    }
+
+    /// The `ao` AOV's radius (positive); without one, the median of the image's H.
+    pub fn with_ao_radius(self, ao_radius: Option<f32>) -> Result<Self> {
+        if let Some(r) = ao_radius.filter(|r| r.is_nan() || *r <= 0.0) {
+            return Err(Error::invalid("ao_radius", format!("must be positive, not {r}")));
+        }
+        Ok(Gather { ao_radius, ..self })
+    }
+
+    /// Independent rounds the rays are cast in.
+    pub fn rounds(&self) -> u32 {
+        self.rounds
     }
 
     /// Gather rays per point.
@@ -68,20 +113,17 @@ impl Gather {
         self.weighting
     }
 
-    /// The gather directions of the point keyed `key`, in its local frame (z = normal): the
-    /// one definition shared by `gather` and the CPU cube map, which looks the same
-    /// directions up in its hemicube (SPEC §3.2). The GPU cube map's shader mirrors it.
+    /// The gather directions of the point keyed `key`, in its local frame (z = normal), as one
+    /// stratified grid of all its rays: the one definition shared by `gather` (with one
+    /// round) and the CPU cube map, which looks the same directions up in its hemicube (SPEC
+    /// §3.2). The GPU cube map's shader mirrors it.
     #[inline]
     pub fn directions(&self, seed: u64, key: u64) -> impl Iterator<Item = Vec3> + '_ {
-        let grid = strata(self.rays);
-        (0..self.rays).map(move |j| {
-            let u = stratified(j, grid, random_pair(seed, key, j as u64));
-            hemisphere(self.weighting, u)
-        })
+        round_directions(self.weighting, seed, key, 0, self.rays)
     }
 
     /// The gather rays of pixel `pixel` from its surface point: the origin (offset off the
-    /// surface) and the world-space directions, exactly the rays the estimator casts.
+    /// surface) and the world-space directions of one stratified grid.
     #[inline]
     pub fn rays(&self, hit: &Hit, seed: u64, pixel: u64) -> (Vec3, impl Iterator<Item = Vec3> + '_) {
         let start = GatherStart::at_hit(hit);
@@ -99,25 +141,23 @@ impl Gather {
         start: &GatherStart,
         seed: u64,
         key: u64,
-        clamp: super::DistanceClamp,
+        clamp: DistanceClamp,
     ) -> (f32, u32) {
-        let frame = Frame::from_normal(start.normal);
-        let mut mean = HarmonicMean::default();
-        let mut escaped = 0;
-        for w in self.directions(seed, key) {
-            let d = accel.hit_distance(start.origin, frame.to_world(w), clamp.max, start.leaving);
-            escaped += d.is_infinite() as u32;
-            mean.add(d, clamp);
+        let mut point = PointGather::new(self.weighting, None);
+        let per_round = self.rays / self.rounds;
+        for _ in 0..self.rounds {
+            point.round(accel, start, seed, key, per_round, clamp);
         }
-        (mean.value(), escaped)
+        (point.mean.value(), point.escaped)
     }
 
     /// This gather's entries in the report.
     pub(crate) fn report_parameters(&self) -> GatherParameters {
-        let grid = strata(self.rays);
+        let grid = strata(self.rays / self.rounds);
         GatherParameters {
             weighting: self.weighting,
             strata: [grid.0, grid.1],
+            rounds: self.rounds,
         }
     }
 }
@@ -135,6 +175,10 @@ impl Estimator for Gather {
         }
     }
 
+    fn aovs(&self) -> &'static [Aov] {
+        &Aov::ALL
+    }
+
     fn expected_rays(&self, pixels: u64) -> u64 {
         pixels * self.rays as u64
     }
@@ -142,13 +186,27 @@ impl Estimator for Gather {
     fn prepare<'a>(
         &'a self,
         context: &'a EstimateContext<'a>,
-        _: &'a GBuffer,
-        _: &dyn Progress,
+        gbuffer: &'a GBuffer,
+        progress: &dyn Progress,
     ) -> Result<Work<'a>> {
+        if context.aovs.contains(&Aov::Relerr) && self.rounds < 2 {
+            let message = format!(
+                "of {} cannot give the relerr AOV: it needs at least 2",
+                self.rounds
+            );
+            return Err(Error::invalid("rounds", message));
+        }
+        let ao_radius = match (self.ao_radius, context.aovs.contains(&Aov::Ao)) {
+            (Some(r), true) => Some(r),
+            // The default radius is the median of H: a first pass finds it.
+            (None, true) => Some(median_hmd(self, context, gbuffer, progress)),
+            (_, false) => None,
+        };
         Ok(Work::Pixels {
             work: Box::new(GatherPixels {
                 gather: self,
                 context,
+                ao_radius,
             }),
             phases: Default::default(),
             rays: None,
@@ -156,11 +214,154 @@ impl Estimator for Gather {
     }
 }
 
-/// `gather` on one image: no scratch, no preparation.
+/// The median of the finite H of the image, from a pass without AOVs (the `ao` AOV's default
+/// radius; +inf where no pixel has a finite H).
+fn median_hmd(gather: &Gather, context: &EstimateContext, gbuffer: &GBuffer, progress: &dyn Progress) -> f32 {
+    let first = EstimateContext {
+        aovs: &[],
+        ..*context
+    };
+    let pass = GatherPixels {
+        gather,
+        context: &first,
+        ao_radius: None,
+    };
+    let (hmd, _, _) = crate::render::pixel_pass(&pass, gbuffer, &[], progress);
+    let mut finite: Vec<f32> = hmd.into_iter().filter(|h| h.is_finite()).collect();
+    if finite.is_empty() {
+        return f32::INFINITY;
+    }
+    let middle = finite.len() / 2;
+    *finite.select_nth_unstable_by(middle, f32::total_cmp).1
+}
+
+/// The directions of round `round` (of `n` rays) of the point keyed `key`, in its local frame:
+/// a jittered stratified grid of `n` rays, ray indices `round·n …`.
+#[inline]
+pub(crate) fn round_directions(
+    weighting: Weighting,
+    seed: u64,
+    key: u64,
+    round: u32,
+    n: u32,
+) -> impl Iterator<Item = Vec3> {
+    let grid = strata(n);
+    let first = round as u64 * n as u64;
+    (0..n).map(move |j| {
+        let u = stratified(j, grid, random_pair(seed, key, first + j as u64));
+        hemisphere(weighting, u)
+    })
+}
+
+/// One point's gather so far, round by round: H, its error bar and the AOVs.
+pub(crate) struct PointGather {
+    weighting: Weighting,
+    ao_radius: Option<f32>,
+    /// Every ray, in ray order: H.
+    pub mean: HarmonicMean,
+    /// Rounds cast, and the running mean and sum of squared deviations of their means of
+    /// `1/d` (Welford).
+    rounds: u32,
+    round_mean: f64,
+    round_m2: f64,
+    pub rays: u32,
+    pub escaped: u32,
+    dmin: f32,
+    /// Cosine weights of the directions that met nothing within the AO radius, and of all.
+    ao_open: f64,
+    ao_total: f64,
+}
+
+impl PointGather {
+    pub fn new(weighting: Weighting, ao_radius: Option<f32>) -> Self {
+        PointGather {
+            weighting,
+            ao_radius,
+            mean: HarmonicMean::default(),
+            rounds: 0,
+            round_mean: 0.0,
+            round_m2: 0.0,
+            rays: 0,
+            escaped: 0,
+            dmin: f32::INFINITY,
+            ao_open: 0.0,
+            ao_total: 0.0,
+        }
+    }
+
+    /// Casts the next round, of `n` rays.
+    #[inline]
+    pub fn round<R: RayCaster>(
+        &mut self,
+        accel: &R,
+        start: &GatherStart,
+        seed: u64,
+        key: u64,
+        n: u32,
+        clamp: DistanceClamp,
+    ) {
+        let frame = Frame::from_normal(start.normal);
+        let mut inverse_sum = 0.0f64;
+        for w in round_directions(self.weighting, seed, key, self.rounds, n) {
+            let d = accel.hit_distance(start.origin, frame.to_world(w), clamp.max, start.leaving);
+            self.escaped += d.is_infinite() as u32;
+            self.dmin = self.dmin.min(d);
+            inverse_sum += self.mean.add_inverse(d, clamp);
+            if let Some(radius) = self.ao_radius {
+                // Cosine-weighted: cosine-distributed directions weigh 1, uniform ones cos θ.
+                let weight = match self.weighting {
+                    Weighting::Cosine => 1.0,
+                    Weighting::Uniform => w.z as f64,
+                };
+                self.ao_total += weight;
+                if d > radius {
+                    self.ao_open += weight;
+                }
+            }
+        }
+        self.rays += n;
+        self.rounds += 1;
+        let m = inverse_sum / n as f64;
+        let delta = m - self.round_mean;
+        self.round_mean += delta / self.rounds as f64;
+        self.round_m2 += delta * (m - self.round_mean);
+    }
+
+    /// Relative standard error of H: that of the mean of `1/d` over the rounds; NaN with
+    /// fewer than 2 rounds or where every ray escaped.
+    pub fn relerr(&self) -> f32 {
+        if self.rounds < 2 || self.round_mean <= 0.0 {
+            return f32::NAN;
+        }
+        let variance_of_mean = self.round_m2 / (self.rounds - 1) as f64 / self.rounds as f64;
+        (variance_of_mean.sqrt() / self.round_mean) as f32
+    }
+
+    /// The AOVs, and what was cast into `tally`.
+    pub fn finish(&self, tally: &mut Tally, aov: &mut AovSample) {
+        tally.rays += self.rays as u64;
+        tally.escaped += self.escaped as u64;
+        *aov = AovSample {
+            relerr: self.relerr(),
+            rays: self.rays as f32,
+            dmin: self.dmin,
+            ao: if self.ao_total > 0.0 {
+                (self.ao_open / self.ao_total) as f32
+            } else {
+                f32::NAN
+            },
+            escaped: self.escaped as f32 / self.rays.max(1) as f32,
+        };
+    }
+}
+
+/// `gather` on one image: no scratch, no preparation (but the AO radius's first pass).
 #[derive(Clone, Copy)]
 struct GatherPixels<'a> {
     gather: &'a Gather,
     context: &'a EstimateContext<'a>,
+    /// The `ao` AOV's radius, where it was asked for.
+    ao_radius: Option<f32>,
 }
 
 impl PixelWork for GatherPixels<'_> {
@@ -177,18 +378,23 @@ impl PixelWork for GatherPixels<'_> {
     }
 
     fn details(&self, _: &PixelPass) -> Details {
-        Details::default()
+        Details {
+            ao_radius: self.ao_radius,
+            ..Details::default()
+        }
     }
 }
 
 impl PixelWorker for GatherPixels<'_> {
-    fn pixel(&mut self, hit: &Hit, pixel: u64, tally: &mut Tally) -> f32 {
-        let c = self.context;
-        let (h, escaped) = self
-            .gather
-            .at(c.accel, &GatherStart::at_hit(hit), c.seed, pixel, c.clamp);
-        tally.rays += self.gather.rays as u64;
-        tally.escaped += escaped as u64;
-        h
+    fn pixel(&mut self, hit: &Hit, pixel: u64, tally: &mut Tally, aov: &mut AovSample) -> f32 {
+        let (c, g) = (self.context, self.gather);
+        let start = GatherStart::at_hit(hit);
+        let mut point = PointGather::new(g.weighting, self.ao_radius);
+        let per_round = g.rays / g.rounds;
+        for _ in 0..g.rounds {
+            point.round(c.accel, &start, c.seed, pixel, per_round, c.clamp);
+        }
+        point.finish(tally, aov);
+        point.mean.value()
     }
 }

@@ -35,6 +35,16 @@ impl HarmonicMean {
         self.count += 1;
     }
 
+    /// Adds one sample distance, as [`HarmonicMean::add`], and returns the `1/d` it added.
+    #[inline(always)]
+    pub fn add_inverse(&mut self, d: f32, clamp: DistanceClamp) -> f64 {
+        let d = d.min(clamp.max).max(clamp.min);
+        let inverse = 1.0 / d as f64;
+        self.inverse_sum += inverse;
+        self.count += 1;
+        inverse
+    }
+
     /// `N / Σ 1/d`: `+inf` if every sample escaped, NaN if there were none.
     pub fn value(&self) -> f32 {
         if self.count == 0 {

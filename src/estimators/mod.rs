@@ -15,12 +15,16 @@
 //! Conventions: distances in scene units; a pixel's normal faces the camera (surfaces are
 //! two-sided); H is `+inf` where every sample escaped and NaN for background pixels and holes.
 
+pub mod adaptive;
+pub mod aov;
 pub mod cubemap;
 pub mod gather;
 mod harmonic;
 pub mod photon;
 pub mod registry;
 
+pub use adaptive::Adaptive;
+pub use aov::{Aov, AovImage, AovSample};
 pub use cubemap::Cubemap;
 pub use gather::Gather;
 pub use harmonic::{DistanceClamp, HarmonicMean};
@@ -64,6 +68,8 @@ pub struct EstimateContext<'a> {
     pub seed: u64,
     /// How sample distances are clamped (SPEC §1).
     pub clamp: DistanceClamp,
+    /// The AOVs asked for (each one in [`Estimator::aovs`]).
+    pub aovs: &'a [Aov],
 }
 
 /// The rays an estimator cast through the scene (primary rays not included), for the report's
@@ -86,6 +92,8 @@ pub struct Estimate {
     pub rays: Option<RayCount>,
     /// The estimator's own phases, in the report's `seconds`.
     pub phases: PhaseSeconds,
+    /// The AOVs asked for, in the order asked.
+    pub aovs: Vec<AovImage>,
     /// Method-specific figures for the report.
     pub details: Details,
 }
@@ -164,8 +172,8 @@ pub trait PixelWork: Sync {
 /// Evaluates pixels one at a time on one thread.
 pub trait PixelWorker {
     /// H at the surface point `hit` of pixel `pixel` (row-major index, the random numbers'
-    /// key); adds what it cast to `tally`.
-    fn pixel(&mut self, hit: &Hit, pixel: u64, tally: &mut Tally) -> f32;
+    /// key); adds what it cast to `tally` and sets the AOVs it measures in `aov`.
+    fn pixel(&mut self, hit: &Hit, pixel: u64, tally: &mut Tally, aov: &mut AovSample) -> f32;
 }
 
 /// One way of computing H per pixel.
@@ -175,6 +183,11 @@ pub trait Estimator: Sync {
 
     /// The method's parameters, for the report.
     fn parameters(&self) -> Parameters;
+
+    /// The AOVs it can measure; asking for another is refused before the render.
+    fn aovs(&self) -> &'static [Aov] {
+        &[]
+    }
 
     /// About how many rays the estimator will cast for an image of `pixels` surface pixels
     /// (primary rays not included): chooses the BVH preset ([`crate::accel::BuildQuality`]).

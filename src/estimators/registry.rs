@@ -2,8 +2,10 @@
 //! the parameters it reads and its constructor. The CLI's `--method`, the experiments and the
 //! Python package all build estimators from here; a new estimator is one new line.
 
+use super::adaptive::{self, Adaptive};
+use super::aov::Aov;
 use super::cubemap::{self, Backend, Cubemap};
-use super::gather::{self, Gather};
+use super::gather::{self, Gather, DEFAULT_ERROR_ROUNDS};
 use super::photon::{self, PathRules, PhotonEstimator, PhotonMethod, PhotonParams, SourceKind};
 use super::Estimator;
 use crate::error::{Error, Result};
@@ -21,6 +23,37 @@ pub struct MethodConfig {
     /// Direction weighting over the hemisphere.
     #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Weighting::Cosine))]
     pub weighting: Weighting,
+    /// gather: cast the rays as R independent rounds (R divides N), for the relerr AOV
+    /// [default: 1; 8 with --aov relerr].
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_name = "R", help_heading = "AOVs and adaptive")
+    )]
+    pub rounds: Option<u32>,
+    /// Radius of the ao AOV [default: the median of the image's H; needed for adaptive].
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_name = "R", help_heading = "AOVs and adaptive")
+    )]
+    pub ao_radius: Option<f32>,
+    /// adaptive: a pixel stops once the relative standard error of its H is below T.
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_name = "T", default_value_t = adaptive::DEFAULT_TOLERANCE, help_heading = "AOVs and adaptive")
+    )]
+    pub tolerance: f32,
+    /// adaptive: rays before the first check, as 8 rounds (a multiple of 8).
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_name = "m", default_value_t = adaptive::DEFAULT_MIN_RAYS, help_heading = "AOVs and adaptive")
+    )]
+    pub min_rays: u32,
+    /// adaptive: a pixel never casts more rays than this.
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_name = "M", default_value_t = adaptive::DEFAULT_MAX_RAYS, help_heading = "AOVs and adaptive")
+    )]
+    pub max_rays: u32,
     /// Per-quadrant hemicube resolution R: top face 2R x 2R, sides 2R x R.
     #[cfg_attr(
         feature = "cli",
@@ -73,6 +106,11 @@ impl Default for MethodConfig {
         MethodConfig {
             rays: gather::DEFAULT_RAYS,
             weighting: Weighting::default(),
+            rounds: None,
+            ao_radius: None,
+            tolerance: adaptive::DEFAULT_TOLERANCE,
+            min_rays: adaptive::DEFAULT_MIN_RAYS,
+            max_rays: adaptive::DEFAULT_MAX_RAYS,
             cube_res: cubemap::DEFAULT_CUBE_RES,
             backend: Backend::default(),
             photons: photon::DEFAULT_PHOTONS,
@@ -86,6 +124,15 @@ impl Default for MethodConfig {
 }
 
 impl MethodConfig {
+    /// The configuration for an image with `aovs`: `rounds` defaults to
+    /// [`DEFAULT_ERROR_ROUNDS`] where `relerr` is asked for.
+    pub fn for_aovs(mut self, aovs: &[Aov]) -> Self {
+        if aovs.contains(&Aov::Relerr) {
+            self.rounds.get_or_insert(DEFAULT_ERROR_ROUNDS);
+        }
+        self
+    }
+
     fn gather(&self) -> Result<Gather> {
         Gather::new(self.rays, self.weighting)
     }
@@ -121,8 +168,20 @@ pub const METHODS: &[MethodEntry] = &[
     MethodEntry {
         name: "gather",
         summary: "Ray-traced final gathering (SPEC §3.1)",
-        parameters: &["rays", "weighting"],
-        build: |c| Ok(Box::new(c.gather()?)),
+        parameters: &["rays", "weighting", "rounds", "ao_radius"],
+        build: |c| {
+            let gather = c.gather()?.with_rounds(c.rounds.unwrap_or(1))?;
+            Ok(Box::new(gather.with_ao_radius(c.ao_radius)?))
+        },
+    },
+    MethodEntry {
+        name: "adaptive",
+        summary: "Final gathering in rounds until H's relative standard error is below --tolerance",
+        parameters: &["weighting", "tolerance", "min_rays", "max_rays", "ao_radius"],
+        build: |c| {
+            let adaptive = Adaptive::new(c.weighting, c.tolerance, c.min_rays, c.max_rays)?;
+            Ok(Box::new(adaptive.with_ao_radius(c.ao_radius)?))
+        },
     },
     MethodEntry {
         name: "cubemap",

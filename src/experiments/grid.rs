@@ -4,7 +4,6 @@
 
 use std::path::Path;
 
-use font8x8::legacy::BASIC_LEGACY;
 use image::{GrayImage, Luma};
 
 use crate::error::Result;
@@ -68,30 +67,9 @@ pub fn grid(tiles: &[Option<Tile>], columns: usize) -> GrayImage {
 
 /// Draws `text` at (x, y) in black, cut at `max_width` pixels.
 fn draw_text(image: &mut GrayImage, x: u32, y: u32, text: &str, max_width: u32) {
-    for (k, c) in text.chars().enumerate() {
-        let left = x + k as u32 * 8 * GLYPH_SCALE;
-        if left + 8 * GLYPH_SCALE > x + max_width {
-            break;
-        }
-        let glyph = BASIC_LEGACY
-            .get(c as usize)
-            .copied()
-            .unwrap_or(BASIC_LEGACY[b'?' as usize]);
-        for (row, bits) in glyph.iter().enumerate() {
-            for col in 0..8 {
-                if bits >> col & 1 == 1 {
-                    for dy in 0..GLYPH_SCALE {
-                        for dx in 0..GLYPH_SCALE {
-                            let (px, py) = (left + col * GLYPH_SCALE + dx, y + row as u32 * GLYPH_SCALE + dy);
-                            if px < image.width() && py < image.height() {
-                                image.put_pixel(px, py, Luma([0]));
-                            }
-                        }
-                    }
-                }
-            }
-        }
-    }
+    let fits = (max_width / (8 * GLYPH_SCALE)) as usize;
+    let text: String = text.chars().take(fits).collect();
+    crate::image::picture::draw_text(image, x, y, &text, GLYPH_SCALE, Luma([0]));
 }
 
 pub fn write_grid(path: &Path, tiles: &[Option<Tile>], columns: usize) -> Result<()> {

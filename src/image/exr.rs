@@ -1,4 +1,5 @@
-//! OpenEXR files with one float32 channel `Y` holding H per pixel (SPEC §7).
+//! OpenEXR files with a float32 channel `Y` holding H per pixel (SPEC §7), and one float32
+//! channel per AOV beside it, named as the AOV (SPEC §8).
 
 use std::io::Cursor;
 use std::path::Path;
@@ -7,18 +8,26 @@ use exr::prelude::*;
 
 use super::{write_atomically, HmdImage};
 use crate::error::{Error as HmdError, Result};
+use crate::estimators::AovImage;
 
 /// The channel name every hmdist EXR uses.
 pub const CHANNEL: &str = "Y";
 
 /// Writes `image` to the EXR file `path`, through a temporary file and a rename.
 pub fn write(image: &HmdImage, path: &Path) -> Result<()> {
-    write_atomically(path, &encode(image, path)?)
+    write_atomically(path, &encode(image, &[], path)?)
 }
 
-/// The bytes of the EXR file of `image`; `path` names the file in errors.
-pub fn encode(image: &HmdImage, path: &Path) -> Result<Vec<u8>> {
-    let channel = AnyChannel::new(CHANNEL, FlatSamples::F32(image.data.clone()));
+/// The bytes of the EXR file of `image` and its `aovs`; `path` names the file in errors.
+pub fn encode(image: &HmdImage, aovs: &[AovImage], path: &Path) -> Result<Vec<u8>> {
+    let mut channels = SmallVec::new();
+    channels.push(AnyChannel::new(CHANNEL, FlatSamples::F32(image.data.clone())));
+    for aov in aovs {
+        channels.push(AnyChannel::new(
+            aov.aov.name(),
+            FlatSamples::F32(aov.data.clone()),
+        ));
+    }
     let layer = Layer::new(
         (image.width as usize, image.height as usize),
         LayerAttributes::named("hmd"),
@@ -29,7 +38,7 @@ pub fn encode(image: &HmdImage, path: &Path) -> Result<Vec<u8>> {
             blocks: Blocks::ScanLines,
             line_order: LineOrder::Increasing,
         },
-        AnyChannels::sort(SmallVec::from_elem(channel, 1)),
+        AnyChannels::sort(channels),
     );
     let mut bytes = Cursor::new(Vec::new());
     Image::from_layer(layer)
@@ -39,9 +48,18 @@ pub fn encode(image: &HmdImage, path: &Path) -> Result<Vec<u8>> {
     Ok(bytes.into_inner())
 }
 
+/// Reads the channel `name` of an EXR's first layer, as an image.
+pub fn read_channel(path: &Path, name: &str) -> Result<HmdImage> {
+    read_named(path, name, false)
+}
+
 /// Reads an EXR written by hmdist (or any EXR whose first layer has a `Y` channel, or a
 /// single channel).
 pub fn read(path: &Path) -> Result<HmdImage> {
+    read_named(path, CHANNEL, true)
+}
+
+fn read_named(path: &Path, name: &str, only_channel_will_do: bool) -> Result<HmdImage> {
     let bytes = std::fs::read(path).map_err(|e| HmdError::io(path, "read", e))?;
     let image = exr::prelude::read()
         .no_deep_data()
@@ -55,13 +73,13 @@ pub fn read(path: &Path) -> Result<HmdImage> {
     let channels = &layer.channel_data.list;
     let channel = channels
         .iter()
-        .find(|c| c.name.eq(CHANNEL))
-        .or(if channels.len() == 1 {
+        .find(|c| c.name.eq(name))
+        .or(if only_channel_will_do && channels.len() == 1 {
             channels.first()
         } else {
             None
         })
-        .ok_or_else(|| HmdError::file(path, "the EXR has no channel named Y"))?;
+        .ok_or_else(|| HmdError::file(path, format!("the EXR has no channel named {name}")))?;
     let data: Vec<f32> = channel.sample_data.values_as_f32().collect();
     let (w, h) = (layer.size.width() as u32, layer.size.height() as u32);
     Ok(HmdImage::new(w, h, data))

@@ -7,7 +7,7 @@
 
 use super::Cubemap;
 use crate::accel::{Hit, RayCaster};
-use crate::estimators::{EstimateContext, HarmonicMean, PixelPass, PixelWork, PixelWorker, Tally};
+use crate::estimators::{AovSample, EstimateContext, HarmonicMean, PixelPass, PixelWork, PixelWorker, Tally};
 use crate::report::{CubemapDetails, Details, PhaseSeconds};
 use crate::sampling::Frame;
 
@@ -67,7 +67,7 @@ struct TexelCache<'a> {
 
 impl PixelWorker for TexelCache<'_> {
     /// H at one pixel from its (lazily filled) hemicube.
-    fn pixel(&mut self, hit: &Hit, pixel: u64, tally: &mut Tally) -> f32 {
+    fn pixel(&mut self, hit: &Hit, pixel: u64, tally: &mut Tally, _: &mut AovSample) -> f32 {
         let (cubemap, context) = (self.pixels.cubemap, self.pixels.context);
         self.current = self.current.wrapping_add(1);
         if self.current == 0 {

@@ -147,6 +147,7 @@ pub fn estimate(
     Ok(Estimate {
         hmd: result.hmd,
         rays: None,
+        aovs: vec![],
         phases: PhaseSeconds {
             cubemap_build: Some(result.raster_seconds),
             cubemap_lookup: Some(result.lookup_seconds),

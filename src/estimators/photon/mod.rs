@@ -14,8 +14,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use super::{
-    EstimateContext, Estimator, GBuffer, HarmonicMean, PixelPass, PixelWork, PixelWorker, RayCount, Tally,
-    Work,
+    AovSample, EstimateContext, Estimator, GBuffer, HarmonicMean, PixelPass, PixelWork, PixelWorker,
+    RayCount, Tally, Work,
 };
 use crate::accel::Hit;
 use crate::error::{Error, Result};
@@ -304,7 +304,7 @@ struct PhotonWorker<'a> {
 }
 
 impl PixelWorker for PhotonWorker<'_> {
-    fn pixel(&mut self, hit: &Hit, _: u64, _: &mut Tally) -> f32 {
+    fn pixel(&mut self, hit: &Hit, _: u64, _: &mut Tally, _: &mut AovSample) -> f32 {
         let w = self.pixels;
         let max_radius = w.estimator.params.max_radius.unwrap_or(f32::INFINITY);
         let clamp = w.context.clamp;

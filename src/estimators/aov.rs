@@ -1,0 +1,101 @@
+//! AOVs: per-pixel companions of H, written as EXR channels beside `Y` (SPEC §8).
+//!
+//! - `relerr`: relative standard error of H, from the spread of independent stratified
+//!   rounds (batch means);
+//! - `rays`: rays cast for the pixel;
+//! - `dmin`: the smallest hit distance over the pixel's rays (`+inf` if all escaped);
+//! - `ao`: ambient occlusion, the cosine-weighted fraction of directions that meet nothing
+//!   within the AO radius;
+//! - `escaped`: the fraction of rays that met nothing.
+
+use crate::error::{Error, Result};
+
+/// One AOV.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum Aov {
+    /// Relative standard error of H, from independent rounds.
+    Relerr,
+    /// Rays cast for the pixel.
+    Rays,
+    /// The smallest hit distance over the pixel's rays.
+    Dmin,
+    /// Cosine-weighted fraction of directions that meet nothing within the AO radius.
+    Ao,
+    /// Fraction of rays that met nothing.
+    Escaped,
+}
+
+impl Aov {
+    /// Every AOV, in channel order.
+    pub const ALL: [Aov; 5] = [Aov::Relerr, Aov::Rays, Aov::Dmin, Aov::Ao, Aov::Escaped];
+
+    /// The EXR channel's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Aov::Relerr => "relerr",
+            Aov::Rays => "rays",
+            Aov::Dmin => "dmin",
+            Aov::Ao => "ao",
+            Aov::Escaped => "escaped",
+        }
+    }
+
+    /// The AOV called `name`.
+    pub fn parse(name: &str) -> Result<Aov> {
+        Aov::ALL.into_iter().find(|a| a.name() == name).ok_or_else(|| {
+            let names: Vec<&str> = Aov::ALL.iter().map(|a| a.name()).collect();
+            Error::invalid("aov", format!("'{name}' is not one of {}", names.join(", ")))
+        })
+    }
+}
+
+/// One pixel's AOVs; NaN where not measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AovSample {
+    /// Relative standard error of H.
+    pub relerr: f32,
+    /// Rays cast.
+    pub rays: f32,
+    /// Smallest hit distance.
+    pub dmin: f32,
+    /// Ambient occlusion.
+    pub ao: f32,
+    /// Fraction of rays that escaped.
+    pub escaped: f32,
+}
+
+impl Default for AovSample {
+    fn default() -> Self {
+        AovSample {
+            relerr: f32::NAN,
+            rays: f32::NAN,
+            dmin: f32::NAN,
+            ao: f32::NAN,
+            escaped: f32::NAN,
+        }
+    }
+}
+
+impl AovSample {
+    /// The value of `aov`.
+    pub fn get(&self, aov: Aov) -> f32 {
+        match aov {
+            Aov::Relerr => self.relerr,
+            Aov::Rays => self.rays,
+            Aov::Dmin => self.dmin,
+            Aov::Ao => self.ao,
+            Aov::Escaped => self.escaped,
+        }
+    }
+}
+
+/// One AOV over a whole image, row-major like H; NaN for background pixels.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AovImage {
+    /// Which AOV.
+    pub aov: Aov,
+    /// Its value per pixel.
+    pub data: Vec<f32>,
+}
