@@ -282,3 +282,67 @@ fn aovs_a_method_cannot_give_are_refused_by_name() {
         })
     ));
 }
+
+#[test]
+fn hmdist_render_writes_each_aov_as_a_channel_of_its_name_and_lists_them() {
+    use common::cli::{hmdist_ok, read_json, refuses};
+    let dir = common::Scratch::new("aov-cli");
+    let args = [
+        "render",
+        "--quiet",
+        "--size",
+        "12x10",
+        "--rays",
+        "16",
+        "--aov",
+        "rays,escaped,relerr",
+        "--png-aov",
+        "dmin",
+        "dmin.png",
+    ];
+    hmdist_ok(dir.path(), &args);
+    let json = read_json(&dir.join("hmd.json"));
+    assert_eq!(
+        json["channels"],
+        serde_json::json!(["Y", "rays", "escaped", "relerr", "dmin"])
+    );
+    assert_eq!(json["rounds"], 8, "relerr without --rounds takes 8 rounds");
+    let exr = dir.join("hmd.exr");
+    let rays = hmdist::image::exr::read_channel(&exr, "rays").unwrap();
+    assert!(rays.data.iter().all(|&n| n == 16.0), "{:?}", rays.data);
+    let escaped = hmdist::image::exr::read_channel(&exr, "escaped").unwrap();
+    assert!(escaped.data.iter().all(|&e| e == 0.0), "cube is closed");
+    let y = hmdist::image::exr::read(&exr).unwrap();
+    let dmin = hmdist::image::exr::read_channel(&exr, "dmin").unwrap();
+    assert!(y.data.iter().zip(&dmin.data).all(|(h, d)| d <= h));
+    let png = image::open(dir.join("dmin.png")).unwrap();
+    assert_eq!(png.width(), 200, "widened for the legend");
+    refuses(
+        "aov-unknown",
+        &[],
+        &["render", "--quiet", "--size", "4x4", "--aov", "colour"],
+        "invalid value 'colour'",
+    );
+    let photon = [
+        "render",
+        "--quiet",
+        "--size",
+        "4x4",
+        "--method",
+        "photon1",
+        "--photons",
+        "100",
+        "--aov",
+        "rays",
+    ];
+    refuses(
+        "aov-photon",
+        &[],
+        &photon,
+        "--aov rays is not measured by photon1",
+    );
+    let rounds = [
+        "render", "--quiet", "--size", "4x4", "--rays", "10", "--rounds", "3",
+    ];
+    refuses("aov-rounds", &[], &rounds, "--rounds must divide the rays (10)");
+}

@@ -156,3 +156,26 @@ fn editing_a_mesh_that_a_toml_scene_references_renders_again_and_nothing_else_do
     let name = exr.file_name().unwrap().to_string_lossy().into_owned();
     assert_ne!(cache_times(&out)[&name], before[&name], "rendered again");
 }
+
+#[test]
+fn the_adaptive_study_compares_both_ways_at_every_tolerance_and_pictures_the_rays() {
+    let dir = Scratch::new("experiments-adaptive");
+    let out = dir.join("out");
+    let mut runner = Runner::new("slab", Preset::Quick, &out, &Silent).unwrap();
+    runner.run("adaptive").unwrap();
+    let csv = std::fs::read_to_string(out.join("adaptive.csv")).unwrap();
+    println!("{csv}");
+    let rays = column(&csv, 1);
+    assert_eq!(rays.len(), 5, "one row per tolerance");
+    // Tighter tolerances cast more rays, within adaptive's bounds (128 … 2,048 per pixel).
+    assert!(rays.windows(2).all(|w| w[0] <= w[1]), "{rays:?}");
+    assert!(rays.iter().all(|r| (128.0..=2048.0).contains(r)), "{rays:?}");
+    for file in ["adaptive.svg", "adaptive_rays.png", "index.html"] {
+        assert!(out.join(file).exists(), "{file}");
+    }
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(
+        html.contains("How many rays does a pixel need"),
+        "the note is in the report"
+    );
+}

@@ -9,9 +9,11 @@
 //! TOML scene's meshes included) renders again.
 //!
 //! The experiments are listed once, in [`EXPERIMENTS`]: the ray studies (`rays.rs`: Tables
-//! 1–2, Fig. 9) and the photon studies (`photons.rs`: Tables 3–4, Fig. 10, 16/17, memory).
+//! 1–2, Fig. 9), the photon studies (`photons.rs`: Tables 3–4, Fig. 10, 16/17, memory) and
+//! the adaptive study (`adaptive.rs`: rays saved at equal f_diff).
 //! The paper's published numbers are in [`paper`].
 
+mod adaptive;
 mod grid;
 pub mod paper;
 mod photons;
@@ -87,6 +89,12 @@ pub const EXPERIMENTS: &[Experiment] = &[
         summary: "method II by source, bounces, K and photons",
         images: |p| 1 + 4 * (p.fig16_photons.len() * p.gathers.len()) as u64,
         run: photons::fig16_17,
+    },
+    Experiment {
+        name: "adaptive",
+        summary: "f_diff against rays cast, fixed N against adaptive gathering (the rays saved)",
+        images: |p| 1 + p.rays.len() as u64 + adaptive::TOLERANCES.len() as u64,
+        run: adaptive::adaptive,
     },
     Experiment {
         name: "memory",
