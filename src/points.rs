@@ -70,6 +70,15 @@ impl SurfacePoint {
         }
     }
 
+    /// The point's absolute floating-point error bound per axis is `error` (as a hit reports
+    /// it, [`crate::accel::Hit::point_error`]): its rays start exactly as the hit's would.
+    pub fn with_error_bound(self, error: Vec3) -> Self {
+        SurfacePoint {
+            error: Some(error),
+            ..self
+        }
+    }
+
     /// A ray hit, with its exact error bound and triangle, and its normal as it is (in a
     /// G-buffer from [`crate::render::primary_hits`], facing the camera).
     pub fn from_hit(hit: &Hit) -> Self {

@@ -1,0 +1,499 @@
+//! `hmdist._hmdist`: the Rust half of the Python package. The Python half (`hmdist/__init__.py`)
+//! checks and converts arrays; everything here receives C-contiguous float64 (and uint64) arrays
+//! of the right shape, releases the GIL while hmdist works, and turns hmdist's errors into
+//! Python exceptions: `ValueError` for bad parameters and scenes, `OSError` for files,
+//! `hmdist.DeviceError` for GPU failures.
+
+use std::sync::OnceLock;
+
+use glam::Vec3;
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::create_exception;
+use pyo3::exceptions::{PyException, PyOSError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use hmdist::accel::{Accel, BuildQuality, Kernel, RayCaster};
+use hmdist::error::Error;
+use hmdist::estimators::cubemap::Backend;
+use hmdist::estimators::photon::SourceKind;
+use hmdist::estimators::{registry, Gather, MethodConfig};
+use hmdist::image::HmdImage;
+use hmdist::points::{hmd_at, PointQuery, SurfacePoint};
+use hmdist::progress::{Progress, Silent};
+use hmdist::render::{render, RenderOptions};
+use hmdist::sampling::Weighting;
+use hmdist::scene::{default_display_scale, framing_camera, Camera, Mesh};
+
+create_exception!(_hmdist, DeviceError, PyException, "A GPU is missing or failed.");
+
+/// hmdist's error as the Python exception of its kind, with hmdist's message.
+fn py_error(error: Error) -> PyErr {
+    let message = error.to_string();
+    match error {
+        Error::File { .. } => PyOSError::new_err(message),
+        Error::Device { .. } => DeviceError::new_err(message),
+        Error::Parameter { .. } | Error::Scene(_) => PyValueError::new_err(message),
+    }
+}
+
+fn value_error(message: impl Into<String>) -> PyErr {
+    PyValueError::new_err(message.into())
+}
+
+/// Rows of an [n, 3] float64 array as vectors.
+fn vectors(array: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<Vec3>> {
+    let slice = array.as_slice().map_err(|e| value_error(e.to_string()))?;
+    Ok(slice
+        .chunks_exact(3)
+        .map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32))
+        .collect())
+}
+
+/// A pinhole camera: where it is, what it looks at, and the image it takes.
+#[pyclass(name = "Camera", module = "hmdist._hmdist", from_py_object)]
+#[derive(Clone)]
+struct PyCamera {
+    camera: Camera,
+    size: (u32, u32),
+}
+
+#[pymethods]
+impl PyCamera {
+    #[new]
+    #[pyo3(signature = (eye, target, up = (0.0, 1.0, 0.0), fov_y_deg = 60.0, size = (512, 512)))]
+    fn new(
+        eye: (f32, f32, f32),
+        target: (f32, f32, f32),
+        up: (f32, f32, f32),
+        fov_y_deg: f32,
+        size: (u32, u32),
+    ) -> PyResult<Self> {
+        let v = |t: (f32, f32, f32)| Vec3::new(t.0, t.1, t.2);
+        let camera = Camera {
+            eye: v(eye),
+            target: v(target),
+            up: v(up),
+            fov_y_deg,
+        };
+        if !(fov_y_deg > 0.0 && fov_y_deg < 180.0) {
+            return Err(value_error(format!(
+                "fov_y_deg must be in (0, 180), not {fov_y_deg}"
+            )));
+        }
+        Ok(PyCamera { camera, size })
+    }
+
+    fn __repr__(&self) -> String {
+        let c = &self.camera;
+        format!(
+            "Camera(eye={:?}, target={:?}, up={:?}, fov_y_deg={}, size={:?})",
+            c.eye.to_array(),
+            c.target.to_array(),
+            c.up.to_array(),
+            c.fov_y_deg,
+            self.size
+        )
+    }
+}
+
+/// A triangle scene, its camera and light, and its BVH once something casts rays.
+#[pyclass(name = "Scene", module = "hmdist._hmdist")]
+struct PyScene {
+    scene: hmdist::scene::Scene,
+    accel: OnceLock<Accel>,
+}
+
+impl PyScene {
+    fn new(scene: hmdist::scene::Scene) -> PyResult<Self> {
+        scene.validate().map_err(py_error)?;
+        Ok(PyScene {
+            scene,
+            accel: OnceLock::new(),
+        })
+    }
+
+    /// The BVH for `hmd_at` and `cast`, built at the first call.
+    fn accel(&self) -> PyResult<&Accel> {
+        if let Some(accel) = self.accel.get() {
+            return Ok(accel);
+        }
+        let kernel = Kernel::from_env().map_err(py_error)?;
+        let accel = Accel::build(&self.scene.mesh, BuildQuality::Fast).with_kernel(kernel);
+        Ok(self.accel.get_or_init(|| accel))
+    }
+}
+
+/// A JSON text as a Python object.
+fn json_to_py<'py>(py: Python<'py>, text: &str) -> PyResult<Bound<'py, PyAny>> {
+    py.import("json")?.call_method1("loads", (text,))
+}
+
+#[pymethods]
+impl PyScene {
+    /// A built-in scene (cube, hall, sphere, slab, dome) or a file (OBJ, PLY, glTF, GLB, TOML).
+    #[staticmethod]
+    fn load(py: Python<'_>, name_or_path: &str) -> PyResult<Self> {
+        let name = name_or_path.to_string();
+        let scene = py
+            .detach(move || hmdist::scene::Scene::load(&name))
+            .map_err(py_error)?;
+        PyScene::new(scene)
+    }
+
+    /// Triangles from float64 vertices [n, 3] and uint64 faces [m, 3] (indices into the
+    /// vertices); a camera framing them.
+    #[staticmethod]
+    fn from_arrays(
+        vertices: PyReadonlyArray2<'_, f64>,
+        faces: PyReadonlyArray2<'_, u64>,
+        name: &str,
+    ) -> PyResult<Self> {
+        let positions = vectors(&vertices)?;
+        let indices = faces.as_slice().map_err(|e| value_error(e.to_string()))?;
+        let mut mesh = Mesh::new();
+        mesh.add_vertices(positions.iter().copied());
+        for (i, f) in indices.chunks_exact(3).enumerate() {
+            if let Some(bad) = f.iter().find(|&&v| v >= positions.len() as u64) {
+                let message = format!(
+                    "faces[{i}] refers to vertex {bad}, but there are {}",
+                    positions.len()
+                );
+                return Err(value_error(message));
+            }
+            mesh.add_triangle(f[0] as u32, f[1] as u32, f[2] as u32);
+        }
+        mesh.validate().map_err(py_error)?;
+        let bounds = mesh.bounds();
+        PyScene::new(hmdist::scene::Scene {
+            name: name.into(),
+            mesh,
+            camera: framing_camera(bounds),
+            light: None,
+            display_scale: default_display_scale(bounds),
+        })
+    }
+
+    /// Triangles, bounds, diagonal, camera, light and display scale.
+    #[getter]
+    fn info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let s = &self.scene;
+        let bounds = s.bounds();
+        let info = PyDict::new(py);
+        info.set_item("name", &s.name)?;
+        info.set_item("triangles", s.mesh.triangle_count())?;
+        info.set_item("bounds", (bounds.min.to_array(), bounds.max.to_array()))?;
+        info.set_item("l_diag", bounds.diagonal())?;
+        let camera = PyDict::new(py);
+        camera.set_item("eye", s.camera.eye.to_array())?;
+        camera.set_item("target", s.camera.target.to_array())?;
+        camera.set_item("up", s.camera.up.to_array())?;
+        camera.set_item("fov_y_deg", s.camera.fov_y_deg)?;
+        info.set_item("camera", camera)?;
+        let light = match s.light {
+            Some(l) => {
+                let light = PyDict::new(py);
+                light.set_item("position", l.position.to_array())?;
+                light.set_item("direction", l.direction.to_array())?;
+                light.set_item("cone_half_angle_deg", l.cone_half_angle_deg)?;
+                Some(light)
+            }
+            None => None,
+        };
+        info.set_item("light", light)?;
+        info.set_item("display_scale", s.display_scale)?;
+        Ok(info)
+    }
+
+    /// H per pixel (float32 [height, width], NaN for background) and the report as a dict
+    /// with the JSON sidecar's keys. Parameters as `hmdist render`'s flags (`rays`,
+    /// `photons`, ...), passed by the Python wrapper as a dict.
+    fn render<'py>(
+        &mut self,
+        py: Python<'py>,
+        camera: Option<PyCamera>,
+        method: &str,
+        params: &Bound<'py, PyDict>,
+        progress: bool,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        let (config, mut options) = configure(params)?;
+        let estimator = registry::build(method, &config.for_aovs(&[])).map_err(py_error)?;
+        let original = self.scene.camera;
+        if let Some(c) = &camera {
+            self.scene.camera = c.camera;
+            (options.width, options.height) = c.size;
+        }
+        let scene = &self.scene;
+        let reporter: &dyn Progress = if progress { &Stderr } else { &Silent };
+        let result = py.detach(|| render(scene, estimator.as_ref(), &options, reporter));
+        self.scene.camera = original;
+        let rendered = result.map_err(py_error)?;
+        let (w, h) = (rendered.image.width as usize, rendered.image.height as usize);
+        let image = PyArray1::from_vec(py, rendered.image.data).reshape([h, w])?;
+        let report = json_to_py(py, &rendered.report.to_json())?;
+        Ok((image.into_any(), report))
+    }
+
+    /// Each pixel's first hit (SPEC §2) as flat float32 arrays: points [n, 3], normals [n, 3]
+    /// (facing the camera), point error bounds [n, 3], triangles (int64 [n], -1 for
+    /// background; then the other rows are NaN).
+    fn primary_hits<'py>(
+        &mut self,
+        py: Python<'py>,
+        camera: Option<PyCamera>,
+        size: (u32, u32),
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let original = self.scene.camera;
+        let size = camera.as_ref().map_or(size, |c| c.size);
+        if let Some(c) = &camera {
+            self.scene.camera = c.camera;
+        }
+        let accel = self.accel()?;
+        let scene = &self.scene;
+        let gbuffer = py.detach(|| hmdist::render::primary_hits(accel, scene, size.0, size.1));
+        self.scene.camera = original;
+        let column = |f: &dyn Fn(&hmdist::accel::Hit) -> Vec3| -> Vec<f32> {
+            gbuffer
+                .points
+                .iter()
+                .flat_map(|h| h.map_or([f32::NAN; 3], |h| f(&h).to_array()))
+                .collect()
+        };
+        let hits = PyDict::new(py);
+        let n = gbuffer.points.len();
+        hits.set_item(
+            "points",
+            PyArray1::from_vec(py, column(&|h| h.point)).reshape([n, 3])?,
+        )?;
+        hits.set_item(
+            "normals",
+            PyArray1::from_vec(py, column(&|h| h.normal)).reshape([n, 3])?,
+        )?;
+        hits.set_item(
+            "point_errors",
+            PyArray1::from_vec(py, column(&|h| h.point_error)).reshape([n, 3])?,
+        )?;
+        let triangles: Vec<i64> = gbuffer
+            .points
+            .iter()
+            .map(|h| h.map_or(-1, |h| h.triangle as i64))
+            .collect();
+        hits.set_item("triangles", PyArray1::from_vec(py, triangles))?;
+        Ok(hits)
+    }
+
+    /// H at points [n, 3] with normals [n, 3] (float64), float32 [n]: point i's random
+    /// numbers keyed by `keys[i]` (uint64 [n]) or by i; optionally the triangle each lies on
+    /// (uint64 [n]) and its error bound (float64 [n, 3]), as `primary_hits` gives them.
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (points, normals, rays, seed, keys, weighting, max_distance, triangles = None, errors = None))]
+    fn hmd_at<'py>(
+        &self,
+        py: Python<'py>,
+        points: PyReadonlyArray2<'py, f64>,
+        normals: PyReadonlyArray2<'py, f64>,
+        rays: u32,
+        seed: u64,
+        keys: Option<PyReadonlyArray1<'py, u64>>,
+        weighting: &str,
+        max_distance: Option<f32>,
+        triangles: Option<PyReadonlyArray1<'py, u64>>,
+        errors: Option<PyReadonlyArray2<'py, f64>>,
+    ) -> PyResult<Bound<'py, PyArray1<f32>>> {
+        let (p, n) = (vectors(&points)?, vectors(&normals)?);
+        let triangles = match &triangles {
+            Some(t) => Some(t.as_slice().map_err(|e| value_error(e.to_string()))?.to_vec()),
+            None => None,
+        };
+        let errors = errors.as_ref().map(vectors).transpose()?;
+        let surface = p
+            .iter()
+            .zip(&n)
+            .enumerate()
+            .map(|(i, (p, n))| {
+                let mut point =
+                    SurfacePoint::new(*p, *n).map_err(|e| value_error(format!("point {i}: {e}")))?;
+                if let Some(t) = &triangles {
+                    point = point.on_triangle(t[i] as u32);
+                }
+                if let Some(e) = &errors {
+                    point = point.with_error_bound(e[i]);
+                }
+                Ok(point)
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        let keys: Option<Vec<u64>> = match &keys {
+            Some(k) => Some(k.as_slice().map_err(|e| value_error(e.to_string()))?.to_vec()),
+            None => None,
+        };
+        let gather = Gather::new(rays, parse_weighting(weighting)?).map_err(py_error)?;
+        let query = PointQuery::new(gather, seed, max_distance).map_err(py_error)?;
+        let accel = self.accel()?;
+        let scene = &self.scene;
+        let h = py
+            .detach(|| hmd_at(scene, accel, &query, &surface, keys.as_deref()))
+            .map_err(py_error)?;
+        Ok(PyArray1::from_vec(py, h))
+    }
+
+    /// Distance to the first hit along each ray (float32 [n], +inf for a miss); directions
+    /// need not be unit length.
+    fn cast<'py>(
+        &self,
+        py: Python<'py>,
+        origins: PyReadonlyArray2<'py, f64>,
+        directions: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray1<f32>>> {
+        let (o, d) = (vectors(&origins)?, vectors(&directions)?);
+        let mut unit = Vec::with_capacity(d.len());
+        for (i, d) in d.iter().enumerate() {
+            let n = d.normalize_or_zero();
+            if n == Vec3::ZERO {
+                return Err(value_error(format!("directions[{i}] is zero")));
+            }
+            unit.push(n);
+        }
+        let accel = self.accel()?;
+        let t: Vec<f32> = py.detach(|| {
+            use rayon::prelude::*;
+            o.par_iter()
+                .zip(&unit)
+                .map(|(o, d)| accel.hit_distance(*o, *d, f32::INFINITY, None))
+                .collect()
+        });
+        Ok(PyArray1::from_vec(py, t))
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Scene('{}', {} triangles)",
+            self.scene.name,
+            self.scene.mesh.triangle_count()
+        )
+    }
+}
+
+/// SPEC §4's f_diff of two images (float64 [h, w] each) of a scene with diagonal `l_diag`.
+#[pyfunction]
+fn f_diff(
+    reference: PyReadonlyArray2<'_, f64>,
+    test: PyReadonlyArray2<'_, f64>,
+    l_diag: f32,
+) -> PyResult<f64> {
+    let image = |a: &PyReadonlyArray2<'_, f64>| -> PyResult<HmdImage> {
+        let shape = a.shape();
+        let data = a.as_slice().map_err(|e| value_error(e.to_string()))?;
+        let data = data.iter().map(|&v| v as f32).collect();
+        Ok(HmdImage::new(shape[1] as u32, shape[0] as u32, data))
+    };
+    let d = hmdist::metrics::f_diff(&image(&reference)?, &image(&test)?, l_diag).map_err(py_error)?;
+    Ok(d.value)
+}
+
+/// One channel of an EXR file (float32 [h, w]): `Y` is H; AOVs have their own names.
+#[pyfunction]
+#[pyo3(signature = (path, channel = "Y"))]
+fn read_exr<'py>(py: Python<'py>, path: &str, channel: &str) -> PyResult<Bound<'py, PyAny>> {
+    let image = hmdist::image::exr::read_channel(std::path::Path::new(path), channel).map_err(py_error)?;
+    let (w, h) = (image.width as usize, image.height as usize);
+    Ok(PyArray1::from_vec(py, image.data).reshape([h, w])?.into_any())
+}
+
+/// Progress on stderr, one line per phase (for `progress=True`).
+struct Stderr;
+
+impl Progress for Stderr {
+    fn start(&self, label: &str, total: u64) {
+        eprintln!("hmdist: {label} ({total} steps)");
+    }
+    fn advance(&self, _: u64) {}
+    fn finish(&self) {}
+}
+
+fn parse_weighting(name: &str) -> PyResult<Weighting> {
+    match name {
+        "cosine" => Ok(Weighting::Cosine),
+        "uniform" => Ok(Weighting::Uniform),
+        other => Err(value_error(format!(
+            "weighting must be cosine or uniform, not '{other}'"
+        ))),
+    }
+}
+
+/// The method configuration and render options from the keyword parameters; an unknown
+/// name is a `ValueError`.
+fn configure(params: &Bound<'_, PyDict>) -> PyResult<(MethodConfig, RenderOptions)> {
+    let mut c = MethodConfig::default();
+    let mut o = RenderOptions::default();
+    for (key, value) in params.iter() {
+        let key: String = key.extract()?;
+        let bad = |e: PyErr| value_error(format!("{key}: {e}"));
+        match key.as_str() {
+            "rays" => c.rays = value.extract().map_err(bad)?,
+            "weighting" => c.weighting = parse_weighting(&value.extract::<String>().map_err(bad)?)?,
+            "rounds" => c.rounds = value.extract().map_err(bad)?,
+            "ao_radius" => c.ao_radius = value.extract().map_err(bad)?,
+            "tolerance" => c.tolerance = value.extract().map_err(bad)?,
+            "min_rays" => c.min_rays = value.extract().map_err(bad)?,
+            "max_rays" => c.max_rays = value.extract().map_err(bad)?,
+            "cube_res" => c.cube_res = value.extract().map_err(bad)?,
+            "backend" => {
+                c.backend = match value.extract::<String>().map_err(bad)?.as_str() {
+                    "auto" => Backend::Auto,
+                    "gpu" => Backend::Gpu,
+                    "cpu" => Backend::Cpu,
+                    other => {
+                        return Err(value_error(format!(
+                            "backend must be auto, gpu or cpu, not '{other}'"
+                        )))
+                    }
+                }
+            }
+            "photons" => c.photons = value.extract().map_err(bad)?,
+            "gather" => c.gather = value.extract().map_err(bad)?,
+            "source" => {
+                c.source = match value.extract::<String>().map_err(bad)?.as_str() {
+                    "light" => SourceKind::Light,
+                    "camera" => SourceKind::Camera,
+                    other => {
+                        return Err(value_error(format!(
+                            "source must be light or camera, not '{other}'"
+                        )))
+                    }
+                }
+            }
+            "max_bounces" => c.max_bounces = value.extract().map_err(bad)?,
+            "absorption" => c.absorption = value.extract().map_err(bad)?,
+            "max_radius" => c.max_radius = value.extract().map_err(bad)?,
+            "seed" => o.seed = value.extract().map_err(bad)?,
+            "threads" => o.threads = value.extract().map_err(bad)?,
+            "max_distance" => o.max_distance = value.extract().map_err(bad)?,
+            "size" => (o.width, o.height) = value.extract().map_err(bad)?,
+            "bvh" => {
+                o.bvh_quality = match value.extract::<String>().map_err(bad)?.as_str() {
+                    "auto" => BuildQuality::Auto,
+                    "fast" => BuildQuality::Fast,
+                    "high" => BuildQuality::High,
+                    other => {
+                        return Err(value_error(format!(
+                            "bvh must be auto, fast or high, not '{other}'"
+                        )))
+                    }
+                }
+            }
+            other => return Err(value_error(format!("unknown parameter '{other}'"))),
+        }
+    }
+    Ok((c, o))
+}
+
+#[pymodule]
+fn _hmdist(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyScene>()?;
+    m.add_class::<PyCamera>()?;
+    m.add_function(wrap_pyfunction!(f_diff, m)?)?;
+    m.add_function(wrap_pyfunction!(read_exr, m)?)?;
+    m.add("DeviceError", m.py().get_type::<DeviceError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}
