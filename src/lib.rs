@@ -70,6 +70,7 @@ pub mod render;
 pub mod report;
 pub mod sampling;
 pub mod scene;
+pub mod shard;
 
 /// The README's Rust examples, run as doctests so that they stay true.
 #[cfg(doctest)]

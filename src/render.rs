@@ -19,6 +19,7 @@ use crate::image::HmdImage;
 use crate::progress::Progress;
 use crate::report::{BoundsReport, CameraReport, LightReport, RenderReport, Seconds};
 use crate::scene::Scene;
+use crate::shard::{Shard, ShardReport};
 
 /// Default image size (SPEC §2).
 pub const DEFAULT_SIZE: (u32, u32) = (1024, 1024);
@@ -45,6 +46,8 @@ pub struct RenderOptions {
     pub bvh_quality: BuildQuality,
     /// AOVs to measure beside H, each an EXR channel (SPEC §8).
     pub aovs: Vec<Aov>,
+    /// Render only this shard's rows ([`crate::shard`]); `None` for the whole image.
+    pub shard: Option<Shard>,
 }
 
 impl Default for RenderOptions {
@@ -57,6 +60,7 @@ impl Default for RenderOptions {
             max_distance: None,
             bvh_quality: BuildQuality::default(),
             aovs: vec![],
+            shard: None,
         }
     }
 }
@@ -147,7 +151,17 @@ fn render_in_pool(
     let accel_build = start.elapsed().as_secs_f64();
 
     let primary_start = Instant::now();
-    let gbuffer = primary_hits(&accel, scene, options.width, options.height);
+    let shard = options.shard;
+    let gbuffer = primary_hits_where(&accel, scene, options.width, options.height, |row| {
+        shard.is_none_or(|s| s.has_row(row))
+    });
+    let background = gbuffer
+        .points
+        .chunks(options.width as usize)
+        .enumerate()
+        .filter(|(row, _)| shard.is_none_or(|s| s.has_row(*row as u32)))
+        .map(|(_, points)| points.iter().filter(|p| p.is_none()).count())
+        .sum();
     let primary = primary_start.elapsed().as_secs_f64();
 
     let bounds = scene.bounds();
@@ -158,6 +172,7 @@ fn render_in_pool(
         seed: options.seed,
         clamp: DistanceClamp::for_diagonal(l_diag, options.max_distance),
         aovs: &options.aovs,
+        whole_image: shard.is_none(),
     };
     let estimate_start = Instant::now();
     let estimate = estimate(estimator, &context, &gbuffer, progress)?;
@@ -194,7 +209,7 @@ fn render_in_pool(
             cone_half_angle_deg: l.cone_half_angle_deg,
         }),
         display_scale: scene.display_scale,
-        background_pixels: gbuffer.background_pixels(),
+        background_pixels: background,
         rays_cast: estimate.rays.map(|r| r.cast),
         escaped_rays: estimate.rays.map(|r| r.escaped),
         mrays_per_s: estimate.rays.map(|r| r.cast as f64 / r.seconds.max(1e-9) / 1e6),
@@ -210,6 +225,12 @@ fn render_in_pool(
             .chain(options.aovs.iter().map(|a| a.name()))
             .map(String::from)
             .collect(),
+        shard: shard.map(|s| ShardReport {
+            index: s.index,
+            count: s.count,
+            fingerprint: crate::shard::fingerprint(scene, estimator, options),
+        }),
+        shards: None,
         parameters: estimator.parameters(),
         details: estimate.details,
     };
@@ -331,11 +352,25 @@ fn pixel_row(
 
 /// Each pixel's first hit along its camera ray (SPEC §2), normal flipped to face the camera.
 pub fn primary_hits(accel: &impl RayCaster, scene: &Scene, width: u32, height: u32) -> GBuffer {
+    primary_hits_where(accel, scene, width, height, |_| true)
+}
+
+/// [`primary_hits`] in the rows `rows` says yes to; the others are left background.
+pub fn primary_hits_where(
+    accel: &impl RayCaster,
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    rows: impl Fn(u32) -> bool + Sync,
+) -> GBuffer {
     let camera = scene.camera.rays(width, height);
     let points = (0..width as u64 * height as u64)
         .into_par_iter()
         .map(|i| {
             let (x, y) = ((i % width as u64) as u32, (i / width as u64) as u32);
+            if !rows(y) {
+                return None;
+            }
             let dir = camera.pixel_direction(x, y);
             accel
                 .closest_hit(camera.eye(), dir, f32::INFINITY, None)

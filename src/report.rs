@@ -57,6 +57,12 @@ pub struct RenderReport {
     pub seconds: Seconds,
     /// The EXR's channels: `Y` (H), then the AOVs asked for.
     pub channels: Vec<String>,
+    /// The shard this part is, for `hmdist merge`; absent for a whole image.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub shard: Option<crate::shard::ShardReport>,
+    /// A merged image's shards and their timings; absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub shards: Option<Vec<crate::shard::ShardTiming>>,
     /// The method's parameters.
     #[serde(flatten)]
     pub parameters: Parameters,

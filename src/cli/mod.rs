@@ -5,6 +5,7 @@
 mod bar;
 mod diff;
 mod experiment;
+mod merge;
 mod points;
 mod render;
 mod scene;
@@ -34,6 +35,8 @@ enum Command {
     Render(render::RenderArgs),
     /// H at the points of a file (.npy or .csv rows x y z nx ny nz), by final gathering.
     Points(points::PointsArgs),
+    /// Merge the parts of `render --shard K/M` into the image one machine would render.
+    Merge(merge::MergeArgs),
     /// Compare two HMD images: f_diff (SPEC §4), RMSE, mean relative error, difference picture.
     Diff(diff::DiffArgs),
     /// Reproduce the paper's analysis on a scene: tables, notes and an HTML report.
@@ -47,6 +50,7 @@ pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Render(args) => render::run(args),
         Command::Points(args) => points::run(args),
+        Command::Merge(args) => merge::run(args),
         Command::Diff(args) => diff::run(args),
         Command::Experiment(args) => experiment::run(args),
         Command::Scene(command) => scene::run(command),

@@ -14,6 +14,7 @@ use hmdist::estimators::Aov;
 use hmdist::image::{exr, picture, OutputSet};
 use hmdist::render::{render, RenderOptions, DEFAULT_SEED};
 use hmdist::scene::Scene;
+use hmdist::shard::Shard;
 
 use super::bar::Bar;
 
@@ -68,9 +69,16 @@ pub struct RenderArgs {
     /// A false-colour PNG of an AOV, with a legend (repeatable); adds the AOV if not asked for.
     #[arg(long, num_args = 2, value_names = ["NAME", "FILE"], help_heading = "AOVs and adaptive")]
     png_aov: Vec<String>,
+    /// Render only shard K of M: the rows r with r mod M = K, for `hmdist merge`.
+    #[arg(long, value_name = "K/M", value_parser = parse_shard)]
+    shard: Option<Shard>,
     /// No progress bar and no summary line.
     #[arg(long)]
     quiet: bool,
+}
+
+fn parse_shard(text: &str) -> std::result::Result<Shard, String> {
+    Shard::parse(text).map_err(|e| e.describe(|_| "--shard".into()))
 }
 
 /// `--method`'s values, with the registry's sentence on each as its help.
@@ -102,6 +110,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         max_distance: args.max_distance,
         bvh_quality: args.bvh,
         aovs,
+        shard: args.shard,
     };
     options.validate()?;
     if let Some(s) = args.scale.filter(|s| !(s.is_finite() && *s > 0.0)) {

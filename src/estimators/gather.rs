@@ -199,7 +199,12 @@ impl Estimator for Gather {
         let ao_radius = match (self.ao_radius, context.aovs.contains(&Aov::Ao)) {
             (Some(r), true) => Some(r),
             // The default radius is the median of H: a first pass finds it.
-            (None, true) => Some(median_hmd(self, context, gbuffer, progress)),
+            (None, true) if context.whole_image => Some(median_hmd(self, context, gbuffer, progress)),
+            (None, true) => {
+                let message =
+                    "is needed for the ao AOV of a shard: the default, the median of H, is the whole image's";
+                return Err(Error::invalid("ao_radius", message));
+            }
             (_, false) => None,
         };
         Ok(Work::Pixels {

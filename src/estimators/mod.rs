@@ -70,6 +70,9 @@ pub struct EstimateContext<'a> {
     pub clamp: DistanceClamp,
     /// The AOVs asked for (each one in [`Estimator::aovs`]).
     pub aovs: &'a [Aov],
+    /// Whether every row is rendered (not a shard): whole-image statistics such as the
+    /// median of H are only known then.
+    pub whole_image: bool,
 }
 
 /// The rays an estimator cast through the scene (primary rays not included), for the report's

@@ -1,0 +1,78 @@
+//! `hmdist merge OUT.exr PART.exr...`: the one-machine image from every shard's part
+//! (`hmdist render --shard K/M`), checked: one render, each shard exactly once.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use hmdist::error::{Error, Result};
+use hmdist::estimators::{Aov, AovImage};
+use hmdist::image::{exr, picture, OutputSet};
+use hmdist::report::RenderReport;
+use hmdist::shard::{merge, Part};
+
+#[derive(Args)]
+pub struct MergeArgs {
+    /// The merged EXR (its PNG and JSON beside it, as `render` writes them).
+    out: PathBuf,
+    /// Every shard's EXR, in any order; each one's JSON sidecar beside it.
+    #[arg(required = true)]
+    parts: Vec<PathBuf>,
+    /// PNG output [default: OUT with .png].
+    #[arg(long)]
+    png: Option<PathBuf>,
+    /// JSON output [default: OUT with .json].
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// No summary line.
+    #[arg(long)]
+    quiet: bool,
+}
+
+/// A part's image, AOVs and report from its EXR and JSON.
+fn read_part(path: &std::path::Path) -> Result<Part> {
+    let json = path.with_extension("json");
+    let text = std::fs::read_to_string(&json).map_err(|e| Error::io(&json, "read", e))?;
+    let report: RenderReport =
+        serde_json::from_str(&text).map_err(|e| Error::file(&json, format!("not a render report: {e}")))?;
+    let image = exr::read(path)?;
+    let aovs = report.channels[1.min(report.channels.len())..]
+        .iter()
+        .map(|name| {
+            Ok(AovImage {
+                aov: Aov::parse(name)?,
+                data: exr::read_channel(path, name)?.data,
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Part { image, aovs, report })
+}
+
+pub fn run(args: MergeArgs) -> Result<()> {
+    let png = args.png.clone().unwrap_or_else(|| args.out.with_extension("png"));
+    let json = args
+        .json
+        .clone()
+        .unwrap_or_else(|| args.out.with_extension("json"));
+    let outputs = OutputSet::reserve(&[&args.out, &png, &json])?;
+    let parts = args
+        .parts
+        .iter()
+        .map(|p| read_part(p))
+        .collect::<Result<Vec<_>>>()?;
+    let merged = merge(parts)?;
+    let exr_bytes = exr::encode(&merged.image, &merged.aovs, &args.out)?;
+    let grey = picture::grey(&merged.image, merged.report.display_scale);
+    let png_bytes = picture::encode_png(&grey, &png)?;
+    outputs.commit(&[&exr_bytes, &png_bytes, merged.report.to_json().as_bytes()])?;
+    if !args.quiet {
+        println!(
+            "merged {} shards -> {}, {}, {}",
+            args.parts.len(),
+            args.out.display(),
+            png.display(),
+            json.display()
+        );
+    }
+    Ok(())
+}

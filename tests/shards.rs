@@ -1,0 +1,141 @@
+//! Shards (`render --shard K/M`) merge (`hmdist merge`) into exactly the one-machine EXR, and
+//! merge refuses parts that do not make one render.
+
+mod common;
+
+use common::cli::{hmdist, hmdist_ok};
+use common::Scratch;
+
+/// Renders `args` whole into `one.exr` and as 4 shards into `partK.exr`.
+fn whole_and_shards(dir: &Scratch, args: &[&str]) {
+    let mut whole = vec!["render", "--quiet", "--out", "one.exr"];
+    whole.extend_from_slice(args);
+    hmdist_ok(dir.path(), &whole);
+    for k in 0..4 {
+        let (shard, out) = (format!("{k}/4"), format!("part{k}.exr"));
+        let mut part = vec!["render", "--quiet", "--shard", &shard, "--out", &out];
+        part.extend_from_slice(args);
+        hmdist_ok(dir.path(), &part);
+    }
+}
+
+fn bytes(dir: &Scratch, name: &str) -> Vec<u8> {
+    std::fs::read(dir.join(name)).unwrap()
+}
+
+#[test]
+fn four_shards_merged_in_any_order_give_the_one_machine_exr_byte_for_byte() {
+    for (name, args) in [
+        (
+            "gather",
+            vec!["--size", "40x27", "--rays", "16", "--aov", "rays,dmin"],
+        ),
+        (
+            "photon2",
+            vec![
+                "--size",
+                "40x27",
+                "--method",
+                "photon2",
+                "--photons",
+                "20000",
+                "--gather",
+                "32",
+            ],
+        ),
+    ] {
+        let dir = Scratch::new(&format!("shards-{name}"));
+        whole_and_shards(&dir, &args);
+        for (out, order) in [("a.exr", [0, 1, 2, 3]), ("b.exr", [3, 1, 0, 2])] {
+            let parts: Vec<String> = order.iter().map(|k| format!("part{k}.exr")).collect();
+            let mut merge = vec!["merge", "--quiet", out];
+            merge.extend(parts.iter().map(String::as_str));
+            hmdist_ok(dir.path(), &merge);
+            assert!(
+                bytes(&dir, out) == bytes(&dir, "one.exr"),
+                "{name}: {out} differs from one.exr"
+            );
+        }
+        assert_ne!(
+            bytes(&dir, "part0.exr"),
+            bytes(&dir, "one.exr"),
+            "a part alone is not the image"
+        );
+        let one = common::cli::read_json(&dir.join("one.json"));
+        let merged = common::cli::read_json(&dir.join("a.json"));
+        for key in ["background_pixels", "method", "channels"] {
+            assert_eq!(merged[key], one[key], "{name}: {key}");
+        }
+        // The merged report sums the rays the shards cast: gather's split the image's, while
+        // each photon shard traces the whole map again.
+        let shards_trace = if name == "photon2" { 4 } else { 1 };
+        for key in ["rays_cast", "escaped_rays"] {
+            assert_eq!(
+                merged[key],
+                shards_trace * one[key].as_u64().unwrap(),
+                "{name}: {key}"
+            );
+        }
+        assert_eq!(merged["shards"].as_array().unwrap().len(), 4);
+    }
+}
+
+#[test]
+fn merge_refuses_a_missing_a_repeated_and_a_foreign_part_and_writes_nothing() {
+    let dir = Scratch::new("shards-refused");
+    whole_and_shards(&dir, &["--size", "16x9", "--rays", "4"]);
+    hmdist_ok(
+        dir.path(),
+        &[
+            "render",
+            "--quiet",
+            "--size",
+            "16x9",
+            "--rays",
+            "4",
+            "--seed",
+            "9",
+            "--shard",
+            "3/4",
+            "--out",
+            "seed9.exr",
+        ],
+    );
+    hmdist_ok(
+        dir.path(),
+        &[
+            "render", "--quiet", "--scene", "slab", "--size", "16x9", "--rays", "4", "--shard", "3/4",
+            "--out", "slab.exr",
+        ],
+    );
+    for (parts, message) in [
+        (vec!["part0.exr", "part1.exr", "part2.exr"], "lack shard 3/4"),
+        (
+            vec!["part0.exr", "part1.exr", "part2.exr", "part2.exr"],
+            "include shard 2/4 twice",
+        ),
+        (
+            vec!["part0.exr", "part1.exr", "part2.exr", "seed9.exr"],
+            "not of one render",
+        ),
+        (
+            vec!["part0.exr", "part1.exr", "part2.exr", "slab.exr"],
+            "not of one render",
+        ),
+        (vec!["one.exr"], "is not a shard"),
+    ] {
+        let mut args = vec!["merge", "out.exr"];
+        args.extend(parts);
+        let out = hmdist(dir.path(), &args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(message), "{message}: {stderr}");
+        assert!(!dir.join("out.exr").exists() && !dir.join("out.json").exists());
+    }
+    let bad = hmdist(
+        dir.path(),
+        &["render", "--quiet", "--shard", "4/4", "--size", "4x4"],
+    );
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--shard"));
+}
