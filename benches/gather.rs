@@ -85,6 +85,7 @@ fn throughput(accel: &Accel, scene: &Scene, gbuffer: &GBuffer, rays: u32) -> (f6
         clamp: DistanceClamp::for_diagonal(scene.diagonal(), None),
         aovs: &[],
         whole_image: true,
+        bvh: BuildQuality::High,
     };
     let gather = Gather::new(rays, Weighting::Cosine).unwrap();
     let mut figures = [0.0; 2];

@@ -173,6 +173,7 @@ fn render_in_pool(
         clamp: DistanceClamp::for_diagonal(l_diag, options.max_distance),
         aovs: &options.aovs,
         whole_image: shard.is_none(),
+        bvh,
     };
     let estimate_start = Instant::now();
     let estimate = estimate(estimator, &context, &gbuffer, progress)?;

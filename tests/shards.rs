@@ -139,3 +139,95 @@ fn merge_refuses_a_missing_a_repeated_and_a_foreign_part_and_writes_nothing() {
     assert_eq!(bad.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--shard"));
 }
+
+#[test]
+fn a_photon_map_built_once_gives_every_shard_the_one_machine_pixels() {
+    let dir = Scratch::new("shards-photon-map");
+    let photon = [
+        "--method",
+        "photon2",
+        "--photons",
+        "30000",
+        "--gather",
+        "32",
+        "--size",
+        "40x27",
+    ];
+    let build = [
+        "photons",
+        "build",
+        "--quiet",
+        "--photons",
+        "30000",
+        "--size",
+        "40x27",
+        "--out",
+        "m.map",
+    ];
+    hmdist_ok(dir.path(), &build);
+    let mut one = vec!["render", "--quiet", "--out", "one.exr"];
+    one.extend(photon);
+    hmdist_ok(dir.path(), &one);
+    for k in 0..4 {
+        let (shard, out) = (format!("{k}/4"), format!("part{k}.exr"));
+        let mut part = vec![
+            "render",
+            "--quiet",
+            "--photon-map",
+            "m.map",
+            "--shard",
+            &shard,
+            "--out",
+            &out,
+        ];
+        part.extend(photon);
+        hmdist_ok(dir.path(), &part);
+    }
+    hmdist_ok(
+        dir.path(),
+        &[
+            "merge",
+            "--quiet",
+            "merged.exr",
+            "part2.exr",
+            "part0.exr",
+            "part1.exr",
+            "part3.exr",
+        ],
+    );
+    assert!(bytes(&dir, "merged.exr") == bytes(&dir, "one.exr"));
+    let part = common::cli::read_json(&dir.join("part0.json"));
+    assert_eq!(
+        part["rays_cast"],
+        serde_json::Value::Null,
+        "a shard over a prebuilt map traces nothing"
+    );
+    assert_eq!(part["seconds"]["photon_trace"], 0.0);
+
+    // A map for another seed, another method, or a damaged file is refused.
+    let refused = |extra: &[&str], message: &str| {
+        let mut args = vec!["render", "--quiet", "--out", "x.exr"];
+        args.extend(extra);
+        if !extra.contains(&"--method") {
+            args.extend(["--method", "photon2"]);
+        }
+        args.extend(&photon[2..]);
+        let out = hmdist(dir.path(), &args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(message), "{message}: {stderr}");
+    };
+    refused(
+        &["--photon-map", "m.map", "--seed", "2"],
+        "is not this render's photon map",
+    );
+    refused(
+        &["--photon-map", "m.map", "--method", "photon1"],
+        "is a map for photon2, not photon1",
+    );
+    let map = bytes(&dir, "m.map");
+    dir.write("short.map", &map[..map.len() - 5]);
+    refused(&["--photon-map", "short.map"], "short.map: is truncated");
+    dir.write("junk.map", b"not a map at all");
+    refused(&["--photon-map", "junk.map"], "is not an hmdist photon map");
+}

@@ -6,6 +6,7 @@ mod bar;
 mod diff;
 mod experiment;
 mod merge;
+mod photons;
 mod points;
 mod render;
 mod scene;
@@ -37,6 +38,9 @@ enum Command {
     Points(points::PointsArgs),
     /// Merge the parts of `render --shard K/M` into the image one machine would render.
     Merge(merge::MergeArgs),
+    /// Build a photon map once, for `render --photon-map` (e.g. for every shard).
+    #[command(subcommand)]
+    Photons(photons::PhotonsCommand),
     /// Compare two HMD images: f_diff (SPEC §4), RMSE, mean relative error, difference picture.
     Diff(diff::DiffArgs),
     /// Reproduce the paper's analysis on a scene: tables, notes and an HTML report.
@@ -51,6 +55,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render(args) => render::run(args),
         Command::Points(args) => points::run(args),
         Command::Merge(args) => merge::run(args),
+        Command::Photons(command) => photons::run(command),
         Command::Diff(args) => diff::run(args),
         Command::Experiment(args) => experiment::run(args),
         Command::Scene(command) => scene::run(command),
@@ -65,6 +70,38 @@ pub fn describe(error: &Error) -> String {
         "bvh_quality" => "--bvh".into(),
         name => format!("--{}", name.replace('_', "-")),
     })
+}
+
+/// What determines an image besides the scene and the method, as `render` and `photons
+/// build` both take it (a photon map is built for the renders that will use it).
+#[derive(clap::Args)]
+pub struct ImageArgs {
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1024x1024", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Seed of the per-pixel random numbers: same seed, same image, whatever the thread count.
+    #[arg(long, default_value_t = hmdist::render::DEFAULT_SEED)]
+    seed: u64,
+    /// Worker threads [default: all cores]. Never changes the output.
+    #[arg(long)]
+    threads: Option<usize>,
+    /// BVH build preset, by the work to come unless named.
+    #[arg(long, value_enum, default_value_t = hmdist::accel::BuildQuality::Auto)]
+    bvh: hmdist::accel::BuildQuality,
+}
+
+impl ImageArgs {
+    /// The library's render options for these flags.
+    fn options(&self) -> hmdist::render::RenderOptions {
+        hmdist::render::RenderOptions {
+            width: self.size.0,
+            height: self.size.1,
+            seed: self.seed,
+            threads: self.threads,
+            bvh_quality: self.bvh,
+            ..Default::default()
+        }
+    }
 }
 
 /// `WIDTHxHEIGHT`, e.g. `1024x1024`.

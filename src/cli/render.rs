@@ -7,12 +7,11 @@ use std::time::Instant;
 
 use clap::Args;
 
-use hmdist::accel::BuildQuality;
 use hmdist::error::{Error, Result};
 use hmdist::estimators::registry::{self, MethodConfig, METHODS};
 use hmdist::estimators::Aov;
 use hmdist::image::{exr, picture, OutputSet};
-use hmdist::render::{render, RenderOptions, DEFAULT_SEED};
+use hmdist::render::{render, RenderOptions};
 use hmdist::scene::Scene;
 use hmdist::shard::Shard;
 
@@ -28,21 +27,11 @@ pub struct RenderArgs {
     method: String,
     #[command(flatten)]
     config: MethodConfig,
-    /// Image size, WIDTHxHEIGHT.
-    #[arg(long, default_value = "1024x1024", value_parser = super::parse_size)]
-    size: (u32, u32),
-    /// Seed of the per-pixel random numbers: same seed, same image, whatever the thread count.
-    #[arg(long, default_value_t = DEFAULT_SEED)]
-    seed: u64,
+    #[command(flatten)]
+    image: super::ImageArgs,
     /// Clamp distances at D; escaping rays then count as D [default: no clamp].
     #[arg(long, value_name = "D")]
     max_distance: Option<f32>,
-    /// Worker threads [default: all cores]. Never changes the output.
-    #[arg(long)]
-    threads: Option<usize>,
-    /// BVH build preset, by the work to come unless named.
-    #[arg(long, value_enum, default_value_t = BuildQuality::Auto)]
-    bvh: BuildQuality,
     /// EXR output: one float32 channel Y with H per pixel, NaN for background.
     #[arg(long, default_value = "hmd.exr")]
     out: PathBuf,
@@ -103,14 +92,10 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let config = args.config.clone().for_aovs(&aovs);
     let estimator = registry::build(&args.method, &config)?;
     let options = RenderOptions {
-        width: args.size.0,
-        height: args.size.1,
-        seed: args.seed,
-        threads: args.threads,
         max_distance: args.max_distance,
-        bvh_quality: args.bvh,
         aovs,
         shard: args.shard,
+        ..args.image.options()
     };
     options.validate()?;
     if let Some(s) = args.scale.filter(|s| !(s.is_finite() && *s > 0.0)) {

@@ -73,6 +73,9 @@ pub struct EstimateContext<'a> {
     /// Whether every row is rendered (not a shard): whole-image statistics such as the
     /// median of H are only known then.
     pub whole_image: bool,
+    /// The BVH preset `accel` was built with (its closest hits can differ, at exact ties,
+    /// from another preset's: a photon map records it).
+    pub bvh: crate::accel::BuildQuality,
 }
 
 /// The rays an estimator cast through the scene (primary rays not included), for the report's

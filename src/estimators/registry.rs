@@ -96,6 +96,12 @@ pub struct MethodConfig {
         arg(long, default_value_t = photon::DEFAULT_ABSORPTION, help_heading = "Photon methods")
     )]
     pub absorption: f32,
+    /// Gather over this photon map file (from `hmdist photons build`) instead of tracing one.
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_name = "FILE", help_heading = "Photon methods")
+    )]
+    pub photon_map: Option<std::path::PathBuf>,
     /// Gather only within this distance of the pixel [default: no limit].
     #[cfg_attr(feature = "cli", arg(long, value_name = "R", help_heading = "Photon methods"))]
     pub max_radius: Option<f32>,
@@ -119,6 +125,7 @@ impl Default for MethodConfig {
             max_bounces: photon::DEFAULT_MAX_BOUNCES,
             absorption: photon::DEFAULT_ABSORPTION,
             max_radius: None,
+            photon_map: None,
         }
     }
 }
@@ -135,6 +142,19 @@ impl MethodConfig {
 
     fn gather(&self) -> Result<Gather> {
         Gather::new(self.rays, self.weighting)
+    }
+
+    /// Method `method` with this configuration's photon parameters, over its `photon_map`
+    /// file where it names one.
+    pub fn photon_estimator(&self, method: PhotonMethod) -> Result<PhotonEstimator> {
+        let estimator = PhotonEstimator::new(method, self.photon_params())?;
+        match &self.photon_map {
+            Some(path) => {
+                let bytes = std::fs::read(path).map_err(|e| Error::io(path, "read", e))?;
+                estimator.with_map_file(&bytes, path)
+            }
+            None => Ok(estimator),
+        }
     }
 
     fn photon_params(&self) -> PhotonParams {
@@ -193,23 +213,18 @@ pub const METHODS: &[MethodEntry] = &[
         name: "photon1",
         summary: "Photon map, method I: harmonic mean of the gathered photons' own distances (SPEC §3.3)",
         parameters: PHOTON_PARAMETERS,
-        build: |c| {
-            let method = PhotonMethod::StoredDistance;
-            Ok(Box::new(PhotonEstimator::new(method, c.photon_params())?))
-        },
+        build: |c| Ok(Box::new(c.photon_estimator(PhotonMethod::StoredDistance)?)),
     },
     MethodEntry {
         name: "photon2",
         summary: "Photon map, method II: distances from the pixel to the photons' next hits (SPEC §3.3)",
         parameters: PHOTON_PARAMETERS,
-        build: |c| {
-            let method = PhotonMethod::NextHitPoint;
-            Ok(Box::new(PhotonEstimator::new(method, c.photon_params())?))
-        },
+        build: |c| Ok(Box::new(c.photon_estimator(PhotonMethod::NextHitPoint)?)),
     },
 ];
 
 const PHOTON_PARAMETERS: &[&str] = &[
+    "photon_map",
     "photons",
     "gather",
     "source",

@@ -18,10 +18,13 @@ use super::{
     RayCount, Tally, Work,
 };
 use crate::accel::Hit;
+use crate::accel::{Accel, BuildQuality};
 use crate::error::{Error, Result};
 use crate::progress::Progress;
+use crate::render::RenderOptions;
 use crate::report::{Details, Parameters, PhaseSeconds, PhotonDetails, PhotonParameters};
-pub use map::{GatherScratch, PhotonMap, PhotonMethod};
+use crate::scene::Scene;
+pub use map::{GatherScratch, MapHeader, PhotonMap, PhotonMethod};
 pub use trace::{trace_photons, PathRules, PhotonSource, PhotonTrace, TracedPhoton};
 
 /// Default stored photons `P` (paper: 130 K … 8.53 M).
@@ -89,10 +92,12 @@ impl Default for PhotonParams {
     }
 }
 
-/// Method I or II over a photon map built once per image.
+/// Method I or II over a photon map built once per image (or read from a file).
 pub struct PhotonEstimator {
     method: PhotonMethod,
     params: PhotonParams,
+    /// A map built beforehand ([`PhotonEstimator::build_map_file`]), and its header.
+    prebuilt: Option<(PhotonMap, MapHeader)>,
 }
 
 impl PhotonEstimator {
@@ -121,25 +126,135 @@ impl PhotonEstimator {
             }
         }
         check_memory(method, params.photons)?;
-        Ok(PhotonEstimator { method, params })
+        Ok(PhotonEstimator {
+            method,
+            params,
+            prebuilt: None,
+        })
     }
 
     fn source(&self, context: &EstimateContext, gbuffer: &GBuffer) -> Result<PhotonSource> {
+        self.source_for(context.scene, (gbuffer.width, gbuffer.height))
+    }
+
+    fn source_for(&self, scene: &Scene, (width, height): (u32, u32)) -> Result<PhotonSource> {
         match self.params.source {
-            SourceKind::Light => context.scene.light.map(PhotonSource::Light).ok_or_else(|| {
+            SourceKind::Light => scene.light.map(PhotonSource::Light).ok_or_else(|| {
                 let message = format!(
                     "light needs a spot light, and scene '{}' has no spot light: add a [light] \
                      to its TOML file or take the camera as the source",
-                    context.scene.name
+                    scene.name
                 );
                 Error::invalid("source", message)
             }),
             SourceKind::Camera => Ok(PhotonSource::Camera(
-                context.scene.camera.rays(gbuffer.width, gbuffer.height),
-                gbuffer.width,
-                gbuffer.height,
+                scene.camera.rays(width, height),
+                width,
+                height,
             )),
         }
+    }
+}
+
+impl PhotonEstimator {
+    /// The fingerprint of this estimator's map for `scene` with `seed`, traced through BVH
+    /// preset `bvh` (resolved), for images of `size` (which camera-sourced photons depend on).
+    pub fn map_fingerprint(&self, scene: &Scene, seed: u64, size: (u32, u32), bvh: BuildQuality) -> u64 {
+        let p = &self.params;
+        let size = (p.source == SourceKind::Camera).then_some(size);
+        let key = format!(
+            "{}|{:016x}|{}|{}|{}|{}|{}|{seed}|{size:?}|{}",
+            env!("CARGO_PKG_VERSION"),
+            scene.fingerprint(),
+            self.method.name(),
+            p.photons,
+            p.source.name(),
+            p.rules.max_bounces,
+            p.rules.absorption.to_bits(),
+            bvh.name()
+        );
+        crate::scene::stable_hash(key.as_bytes())
+    }
+
+    /// Traces and indexes the photon map that a render of `scene` with `options` (its size,
+    /// seed, threads and BVH preset) would build, as the bytes of a map file.
+    pub fn build_map_file(
+        &self,
+        scene: &Scene,
+        options: &RenderOptions,
+        progress: &dyn Progress,
+    ) -> Result<Vec<u8>> {
+        options.validate()?;
+        scene.validate()?;
+        crate::render::in_pool(options.threads, || {
+            let pixels = options.width as u64 * options.height as u64;
+            let bvh = options
+                .bvh_quality
+                .resolve(pixels + self.expected_rays(pixels), scene.mesh.triangle_count());
+            let accel = Accel::build(&scene.mesh, bvh).with_kernel(crate::accel::Kernel::from_env()?);
+            let source = self.source_for(scene, (options.width, options.height))?;
+            let (map, header, _) = self.trace_and_index(&accel, &source, options.seed, progress)?;
+            let fingerprint = self.map_fingerprint(scene, options.seed, (options.width, options.height), bvh);
+            Ok(map.to_bytes(&MapHeader {
+                fingerprint,
+                ..header
+            }))
+        })?
+    }
+
+    /// This estimator, gathering over the map in `bytes` (a map file, named `path` in
+    /// errors) instead of tracing its own; a render checks that the map is its own.
+    pub fn with_map_file(self, bytes: &[u8], path: &std::path::Path) -> Result<Self> {
+        let (map, header) = PhotonMap::from_bytes(bytes, self.method).map_err(|e| Error::file(path, e))?;
+        if header.photons_stored != self.params.photons as u64 {
+            let message = format!(
+                "holds {} photons, not {}",
+                header.photons_stored, self.params.photons
+            );
+            return Err(Error::file(path, message));
+        }
+        Ok(PhotonEstimator {
+            prebuilt: Some((map, header)),
+            ..self
+        })
+    }
+
+    /// Traces the photons from `source` and indexes them: the map, its header (fingerprint
+    /// 0) and the seconds of each phase.
+    fn trace_and_index(
+        &self,
+        accel: &Accel,
+        source: &PhotonSource,
+        seed: u64,
+        progress: &dyn Progress,
+    ) -> Result<(PhotonMap, MapHeader, PhaseSeconds)> {
+        let p = &self.params;
+        let start = Instant::now();
+        progress.start("photons", p.photons as u64);
+        let done = AtomicU64::new(0);
+        let report = |stored: usize| {
+            let before = done.swap(stored as u64, Ordering::Relaxed);
+            progress.advance(stored as u64 - before);
+        };
+        let traced = trace_photons(accel, source, p.rules, p.photons, seed, &report)?;
+        progress.finish();
+        let photon_trace = start.elapsed().as_secs_f64();
+        let start = Instant::now();
+        let map = PhotonMap::build(&traced.photons, self.method)?;
+        let header = MapHeader {
+            fingerprint: 0,
+            photons_stored: traced.photons.len() as u64,
+            paths_traced: traced.paths_traced,
+            escaped_photons: traced.escaped,
+            rays_cast: traced.rays_cast(),
+            escaped_rays: traced.escaped_rays(),
+        };
+        let phases = PhaseSeconds {
+            photon_trace: Some(photon_trace),
+            photon_index: Some(start.elapsed().as_secs_f64()),
+            ..PhaseSeconds::default()
+        };
+        Ok((map, header, phases))
     }
 }
 
@@ -205,47 +320,66 @@ impl Estimator for PhotonEstimator {
         gbuffer: &'a GBuffer,
         progress: &dyn Progress,
     ) -> Result<Work<'a>> {
-        let source = self.source(context, gbuffer)?;
-        let p = &self.params;
-
-        let start = Instant::now();
-        progress.start("photons", p.photons as u64);
-        let done = AtomicU64::new(0);
-        let report = |stored: usize| {
-            let before = done.swap(stored as u64, Ordering::Relaxed);
-            progress.advance(stored as u64 - before);
+        let (map, header, phases) = match &self.prebuilt {
+            Some((map, header)) => {
+                let size = (gbuffer.width, gbuffer.height);
+                let expected = self.map_fingerprint(context.scene, context.seed, size, context.bvh);
+                if header.fingerprint != expected {
+                    let message = "is not this render's photon map: built for another scene, photon \
+                                   parameters, seed, BVH preset, image size (camera source) or version";
+                    return Err(Error::invalid("photon_map", message));
+                }
+                // Nothing traced or indexed here: the keys stay, at zero seconds.
+                let phases = PhaseSeconds {
+                    photon_trace: Some(0.0),
+                    photon_index: Some(0.0),
+                    ..PhaseSeconds::default()
+                };
+                (Maps::Shared(map), *header, phases)
+            }
+            None => {
+                let source = self.source(context, gbuffer)?;
+                let (map, header, phases) =
+                    self.trace_and_index(context.accel, &source, context.seed, progress)?;
+                (Maps::Own(Box::new(map)), header, phases)
+            }
         };
-        let traced = trace_photons(context.accel, &source, p.rules, p.photons, context.seed, &report)?;
-        progress.finish();
-        let photon_trace = start.elapsed().as_secs_f64();
-
-        let start = Instant::now();
-        let map = PhotonMap::build(&traced.photons, self.method)?;
-        let photon_index = start.elapsed().as_secs_f64();
         let rays = RayCount {
-            cast: traced.rays_cast(),
-            escaped: traced.escaped_rays(),
-            seconds: photon_trace,
+            cast: header.rays_cast,
+            escaped: header.escaped_rays,
+            seconds: phases.photon_trace.unwrap_or(0.0),
         };
         let work = PhotonPixels {
             estimator: self,
             context,
             map,
-            k: NonZero::new(p.gather).expect("validated: gather ≥ 1"),
-            photons_stored: traced.photons.len(),
-            paths_traced: traced.paths_traced,
-            escaped_photons: traced.escaped,
+            k: NonZero::new(self.params.gather).expect("validated: gather ≥ 1"),
+            photons_stored: header.photons_stored as usize,
+            paths_traced: header.paths_traced,
+            escaped_photons: header.escaped_photons,
         };
-        drop(traced);
         Ok(Work::Pixels {
             work: Box::new(work),
-            phases: PhaseSeconds {
-                photon_trace: Some(photon_trace),
-                photon_index: Some(photon_index),
-                ..PhaseSeconds::default()
-            },
-            rays: Some(rays),
+            phases,
+            // A prebuilt map's tracing cast its rays elsewhere, once.
+            rays: self.prebuilt.is_none().then_some(rays),
         })
+    }
+}
+
+/// The map a render gathers over: its own, or one read from a file.
+enum Maps<'a> {
+    Own(Box<PhotonMap>),
+    Shared(&'a PhotonMap),
+}
+
+impl std::ops::Deref for Maps<'_> {
+    type Target = PhotonMap;
+    fn deref(&self) -> &PhotonMap {
+        match self {
+            Maps::Own(map) => map,
+            Maps::Shared(map) => map,
+        }
     }
 }
 
@@ -254,7 +388,7 @@ impl Estimator for PhotonEstimator {
 struct PhotonPixels<'a> {
     estimator: &'a PhotonEstimator,
     context: &'a EstimateContext<'a>,
-    map: PhotonMap,
+    map: Maps<'a>,
     k: NonZero<usize>,
     photons_stored: usize,
     paths_traced: u64,

@@ -1,0 +1,75 @@
+//! `hmdist photons build`: the photon map as a stage of its own, traced and indexed once and
+//! written to a file that `render --photon-map FILE` gathers over (every shard of a sharded
+//! photon render over the same map).
+
+use std::path::PathBuf;
+
+use clap::{Args, Subcommand};
+
+use hmdist::error::Result;
+use hmdist::estimators::photon::PhotonMethod;
+use hmdist::estimators::MethodConfig;
+use hmdist::image::write_atomically;
+use hmdist::scene::Scene;
+
+use super::bar::Bar;
+
+#[derive(Subcommand)]
+pub enum PhotonsCommand {
+    /// Trace and index the photon map a render would build, into a file for --photon-map.
+    Build(BuildArgs),
+}
+
+#[derive(Args)]
+pub struct BuildArgs {
+    /// Scene: a built-in (cube, hall, sphere, slab, dome) or a file.
+    #[arg(long, default_value = "cube")]
+    scene: String,
+    /// Photon method the map is for: photon1 stores distances, photon2 next-hit points.
+    #[arg(long, default_value = "photon2", value_parser = ["photon1", "photon2"])]
+    method: String,
+    #[command(flatten)]
+    config: MethodConfig,
+    /// The renders' size, seed and BVH preset: camera-sourced photons depend on the size,
+    /// and the BVH preset is chosen by it.
+    #[command(flatten)]
+    image: super::ImageArgs,
+    /// The map file.
+    #[arg(long, default_value = "photons.map")]
+    out: PathBuf,
+    /// No progress bar and no summary line.
+    #[arg(long)]
+    quiet: bool,
+}
+
+pub fn run(command: PhotonsCommand) -> Result<()> {
+    let PhotonsCommand::Build(args) = command;
+    let method = match args.method.as_str() {
+        "photon1" => PhotonMethod::StoredDistance,
+        _ => PhotonMethod::NextHitPoint,
+    };
+    let config = MethodConfig {
+        photon_map: None,
+        ..args.config.clone()
+    };
+    let estimator = config.photon_estimator(method)?;
+    let options = args.image.options();
+    let bar = Bar::new(args.quiet);
+    bar.status("loading");
+    let scene = Scene::load(&args.scene)?;
+    let start = std::time::Instant::now();
+    let bytes = estimator.build_map_file(&scene, &options, &bar)?;
+    write_atomically(&args.out, &bytes)?;
+    if !args.quiet {
+        println!(
+            "{}: {} map of {} photons in {:.2} s, {:.1} MB -> {}",
+            scene.name,
+            method.name(),
+            config.photons,
+            start.elapsed().as_secs_f64(),
+            bytes.len() as f64 / 1e6,
+            args.out.display()
+        );
+    }
+    Ok(())
+}
