@@ -9,7 +9,7 @@ use crate::estimators::photon::SourceKind;
 use crate::sampling::Weighting;
 
 /// One rendered image's report: the JSON sidecar.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct RenderReport {
     /// The hmdist that rendered it.
     pub hmdist_version: String,
@@ -121,7 +121,7 @@ impl RenderReport {
 }
 
 /// An axis-aligned box.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
 pub struct BoundsReport {
     /// Smallest corner.
     pub min: [f32; 3],
@@ -130,7 +130,7 @@ pub struct BoundsReport {
 }
 
 /// A pinhole camera.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
 pub struct CameraReport {
     /// Eye position.
     pub eye: [f32; 3],

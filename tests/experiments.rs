@@ -179,3 +179,40 @@ fn the_adaptive_study_compares_both_ways_at_every_tolerance_and_pictures_the_ray
         "the note is in the report"
     );
 }
+
+#[test]
+fn an_experiment_spread_over_shards_renders_each_image_once_and_writes_the_one_machine_tables() {
+    use hmdist::shard::Shard;
+    let dir = Scratch::new("experiments-shards");
+    let (one, spread) = (dir.join("one"), dir.join("spread"));
+    Runner::new("slab", Preset::Quick, &one, &Silent)
+        .unwrap()
+        .run("table1")
+        .unwrap();
+    let mut rendered = 0;
+    for k in [1, 0] {
+        let runner = Runner::new("slab", Preset::Quick, &spread, &Silent).unwrap();
+        let mut shard = runner.with_shard(Shard::new(k, 2).unwrap()).unwrap();
+        shard.run("table1").unwrap();
+        rendered += shard.shard_counts().unwrap().0;
+        assert!(!spread.join("table1.csv").exists(), "a shard writes no tables");
+    }
+    assert_eq!(
+        cache_times(&spread).len(),
+        cache_times(&one).len(),
+        "every image, once"
+    );
+    assert_eq!(
+        rendered as usize * 2,
+        cache_times(&one).len(),
+        "an EXR and a JSON per image"
+    );
+    let before = backdate_cache(&spread);
+    Runner::new("slab", Preset::Quick, &spread, &Silent)
+        .unwrap()
+        .run("table1")
+        .unwrap();
+    assert_eq!(cache_times(&spread), before, "the final run renders nothing");
+    let csv = |out: &Path| std::fs::read_to_string(out.join("table1.csv")).unwrap();
+    assert_eq!(csv(&spread), csv(&one));
+}

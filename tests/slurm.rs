@@ -1,5 +1,6 @@
 //! `contrib/slurm` on a real (one-node) Slurm: a 4-task array renders the shards, a dependent
-//! job merges them, and the merged EXR is byte for byte the one-machine render's. It starts
+//! job merges them, and the merged EXR is byte for byte the one-machine render's; an
+//! experiment spread over an array gives the one-machine table. It starts
 //! daemons (munged, slurmctld, slurmd; as root), so it runs only where HMDIST_SLURM_TEST is
 //! set: `.ci/run` sets it and installs `slurm-wlm` and `munge`.
 
@@ -50,22 +51,27 @@ fn a_four_task_slurm_array_renders_what_one_machine_renders() {
         "{}",
         String::from_utf8_lossy(&start.stderr)
     );
+    // Submits a contrib/slurm script and waits for its jobs.
+    let submit = |name: &str, args: &[&str]| {
+        let out = Command::new(script(name))
+            .args(args)
+            .current_dir(dir.path())
+            .env("SLURM_CONF", state.join("slurm.conf"))
+            .env("HMDIST", env!("CARGO_BIN_EXE_hmdist"))
+            .env("HMDIST_SLURM_WAIT", "1")
+            .output()
+            .unwrap();
+        let said = format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(out.status.success(), "{name}: {said}");
+    };
     let render = ["--size", "48x32", "--rays", "16", "--aov", "rays"];
-    let out = Command::new(script("render.sh"))
-        .args(["4", "parts", "merged.exr"])
-        .args(render)
-        .current_dir(dir.path())
-        .env("SLURM_CONF", state.join("slurm.conf"))
-        .env("HMDIST", env!("CARGO_BIN_EXE_hmdist"))
-        .env("HMDIST_SLURM_WAIT", "1")
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let mut args = vec!["4", "parts", "merged.exr"];
+    args.extend(render);
+    submit("render.sh", &args);
     let mut one = vec!["render", "--quiet", "--out", "one.exr"];
     one.extend(render);
     hmdist_ok(dir.path(), &one);
@@ -76,4 +82,23 @@ fn a_four_task_slurm_array_renders_what_one_machine_renders() {
     );
     let parts = std::fs::read_dir(dir.join("parts")).unwrap().count();
     assert_eq!(parts, 4 * 3, "four parts, each an EXR, a PNG and a JSON");
+
+    // An experiment: a 3-task array renders the images, a dependent job writes the report,
+    // whose table is the one-machine run's.
+    submit("experiment.sh", &["3", "table1", "spread", "--scene", "slab"]);
+    hmdist_ok(
+        dir.path(),
+        &[
+            "experiment",
+            "table1",
+            "--quiet",
+            "--scene",
+            "slab",
+            "--out",
+            "one",
+        ],
+    );
+    let table = |folder: &str| std::fs::read_to_string(dir.join(folder).join("table1.csv")).unwrap();
+    assert_eq!(table("spread"), table("one"));
+    assert!(dir.join("spread").join("index.html").exists());
 }

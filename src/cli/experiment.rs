@@ -6,6 +6,7 @@ use clap::Args;
 
 use hmdist::error::Result;
 use hmdist::experiments::{select, Preset, Runner, EXPERIMENTS};
+use hmdist::shard::Shard;
 
 use super::bar::Bar;
 
@@ -23,6 +24,10 @@ pub struct ExperimentArgs {
     /// Output folder: tables (CSV, Markdown), index.html, and the image cache that reruns reuse.
     #[arg(long, default_value = "experiments")]
     out: PathBuf,
+    /// Render only shard K of M of the images (into OUT/cache); a run without --shard then
+    /// finds them all cached and writes the tables and the report.
+    #[arg(long, value_name = "K/M", value_parser = super::render::parse_shard)]
+    shard: Option<Shard>,
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
@@ -42,7 +47,22 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
     select(&args.name)?;
     let bar = Bar::new(args.quiet);
     let mut runner = Runner::new(&args.scene, preset, &args.out, &bar)?;
+    if let Some(shard) = args.shard {
+        runner = runner.with_shard(shard)?;
+    }
     runner.run(&args.name)?;
+    if let Some((rendered, others)) = runner.shard_counts() {
+        if !args.quiet {
+            println!(
+                "shard {}/{}: rendered {rendered} images into {} ({others} are other shards'); \
+                 run again without --shard to write the report",
+                args.shard.map_or(0, |s| s.index),
+                args.shard.map_or(1, |s| s.count),
+                args.out.join("cache").display()
+            );
+        }
+        return Ok(());
+    }
     if !args.quiet {
         for section in &runner.sections {
             for table in &section.tables {

@@ -66,7 +66,7 @@ pub struct RenderArgs {
     quiet: bool,
 }
 
-fn parse_shard(text: &str) -> std::result::Result<Shard, String> {
+pub(super) fn parse_shard(text: &str) -> std::result::Result<Shard, String> {
     Shard::parse(text).map_err(|e| e.describe(|_| "--shard".into()))
 }
 

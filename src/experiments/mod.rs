@@ -31,6 +31,8 @@ use crate::progress::{Progress, Silent};
 use crate::render::{render, RenderOptions};
 use crate::report::RenderReport;
 use crate::scene::{stable_hash, Scene};
+use crate::shard::Shard;
+use std::cell::Cell;
 pub use table::Table;
 
 /// One experiment: its name, what it shows, how many images it may render, and the code.
@@ -224,6 +226,22 @@ pub struct Runner<'a> {
     progress: &'a dyn Progress,
     /// What the experiments run so far produced, for the report.
     pub sections: Vec<Section>,
+    /// Where rendered images are cached: `OUT/cache`.
+    cache: PathBuf,
+    /// Set for `experiment --shard K/M`: which images this run renders.
+    shard: Option<ShardRun>,
+}
+
+/// A shard's share of an experiment's images: request `i` (in the order the experiment asks,
+/// the same on every shard) is rendered by shard `i mod M`; the others' images, where not
+/// cached, are stand-ins, and the shard writes nothing but its images into the cache. A run
+/// without `--shard` then finds every image cached and writes the tables and the report.
+struct ShardRun {
+    shard: Shard,
+    requests: Cell<u64>,
+    rendered: Cell<u64>,
+    stand_ins: Cell<u64>,
+    render_failed: Cell<bool>,
 }
 
 impl<'a> Runner<'a> {
@@ -246,19 +264,55 @@ impl<'a> Runner<'a> {
             out: out.to_path_buf(),
             progress,
             sections: vec![],
+            cache: out.join("cache"),
+            shard: None,
         })
     }
 
-    /// Runs experiment `name` (or every one for `all`), then rewrites the report.
+    /// This runner as shard `shard` of a run spread over machines ([`ShardRun`]): its tables
+    /// and pictures go to a scratch folder, removed at the end.
+    pub fn with_shard(mut self, shard: Shard) -> Result<Self> {
+        let scratch = self
+            .out
+            .join(format!(".shard-{}-of-{}", shard.index, shard.count));
+        std::fs::create_dir_all(&scratch).map_err(|e| Error::io(&scratch, "create the folder", e))?;
+        self.out = scratch;
+        self.shard = Some(ShardRun {
+            shard,
+            requests: Cell::new(0),
+            rendered: Cell::new(0),
+            stand_ins: Cell::new(0),
+            render_failed: Cell::new(false),
+        });
+        Ok(self)
+    }
+
+    /// For a shard: how many images it rendered, and how many it left to other shards.
+    pub fn shard_counts(&self) -> Option<(u64, u64)> {
+        self.shard.as_ref().map(|s| (s.rendered.get(), s.stand_ins.get()))
+    }
+
+    /// Runs experiment `name` (or every one for `all`), then rewrites the report; a shard
+    /// only renders its share of the images.
     pub fn run(&mut self, name: &str) -> Result<()> {
         for experiment in select(name)? {
             self.progress
                 .start(experiment.name, (experiment.images)(&self.params));
-            let section = (experiment.run)(self)?;
+            let result = (experiment.run)(self);
             self.progress.finish();
-            self.sections.push(section);
+            match (result, &self.shard) {
+                (Ok(section), None) => self.sections.push(section),
+                (Ok(_), Some(_)) => {}
+                // The analysis of stand-in images can fail (nothing to plot); rendering
+                // cannot, unnoticed.
+                (Err(_), Some(s)) if !s.render_failed.get() && s.stand_ins.get() > 0 => {}
+                (Err(e), _) => return Err(e),
+            }
         }
-        report::write(self)
+        match &self.shard {
+            Some(_) => std::fs::remove_dir_all(&self.out).map_err(|e| Error::io(&self.out, "remove", e)),
+            None => report::write(self),
+        }
     }
 
     /// The image method `method` (a registry name) renders with `config` and `seed`: see
@@ -284,9 +338,14 @@ impl<'a> Runner<'a> {
         );
         let stem = format!("{}-{:016x}", estimator.method(), stable_hash(key.as_bytes()));
         let (exr_path, json_path) = (
-            self.out.join("cache").join(format!("{stem}.exr")),
-            self.out.join("cache").join(format!("{stem}.json")),
+            self.cache.join(format!("{stem}.exr")),
+            self.cache.join(format!("{stem}.json")),
         );
+        let request = self.shard.as_ref().map(|s| {
+            let i = s.requests.get();
+            s.requests.set(i + 1);
+            (s, i % s.shard.count as u64 == s.shard.index as u64)
+        });
         if let (Ok(image), Ok(text)) = (exr::read(&exr_path), std::fs::read_to_string(&json_path)) {
             if let Ok(report) = serde_json::from_str::<RenderReport>(&text) {
                 // The version is in the key; a report that says otherwise was not ours.
@@ -295,13 +354,31 @@ impl<'a> Runner<'a> {
                 }
             }
         }
+        if let Some((s, false)) = request {
+            // Another shard's image: a stand-in of the right size.
+            s.stand_ins.set(s.stand_ins.get() + 1);
+            let pixels = (size * size) as usize;
+            let report = RenderReport {
+                width: size,
+                height: size,
+                ..RenderReport::default()
+            };
+            return Ok((HmdImage::new(size, size, vec![1.0; pixels]), report));
+        }
         let options = RenderOptions {
             width: size,
             height: size,
             seed,
             ..RenderOptions::default()
         };
-        let rendered = render(&self.scene, estimator, &options, &Silent)?;
+        let rendered = render(&self.scene, estimator, &options, &Silent).inspect_err(|_| {
+            if let Some((s, _)) = request {
+                s.render_failed.set(true);
+            }
+        })?;
+        if let Some((s, _)) = request {
+            s.rendered.set(s.rendered.get() + 1);
+        }
         exr::write(&rendered.image, &exr_path)?;
         // The JSON last: an image counts as cached only once both files are in place.
         write_atomically(&json_path, rendered.report.to_json().as_bytes())?;
