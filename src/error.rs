@@ -113,6 +113,16 @@ impl Error {
         }
     }
 
+    /// Refuses `value` of parameter `name` unless it is absent or a positive number.
+    pub fn check_positive(name: &'static str, value: Option<f32>) -> Result<()> {
+        match value {
+            Some(v) if v.is_nan() || v <= 0.0 => {
+                Err(Error::invalid(name, format!("must be positive, not {v}")))
+            }
+            _ => Ok(()),
+        }
+    }
+
     /// A device failure of `kind`.
     pub fn device(kind: DeviceErrorKind, message: impl Into<String>) -> Self {
         Error::Device {

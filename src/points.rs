@@ -21,7 +21,6 @@ use crate::accel::{Accel, Hit};
 use crate::error::{Error, Result};
 use crate::estimators::gather::GatherStart;
 use crate::estimators::{DistanceClamp, Gather};
-use crate::render::validate_max_distance;
 use crate::scene::Scene;
 
 /// A point on a surface and the normal of the side it is seen from.
@@ -120,7 +119,7 @@ impl SurfacePoint {
         };
         Ok(GatherStart {
             origin: crate::accel::offset_ray_origin(self.point, error, self.normal, self.normal),
-            normal: self.normal,
+            frame: crate::sampling::Frame::from_normal(self.normal),
             leaving: self.triangle,
         })
     }
@@ -144,7 +143,7 @@ impl PointQuery {
     /// `gather`'s rays with random numbers of `seed`, distances clamped at `max_distance`
     /// (positive; `None` for no clamp), as `hmdist render` does with the same values.
     pub fn new(gather: Gather, seed: u64, max_distance: Option<f32>) -> Result<Self> {
-        validate_max_distance(max_distance)?;
+        Error::check_positive("max_distance", max_distance)?;
         Ok(PointQuery {
             gather,
             seed,

@@ -77,22 +77,11 @@ impl RenderOptions {
             let message = format!("{w}x{h} exceeds the limit of {MAX_PIXELS} pixels");
             return Err(Error::invalid("size", message));
         }
-        validate_max_distance(self.max_distance)?;
+        Error::check_positive("max_distance", self.max_distance)?;
         if self.threads == Some(0) {
             return Err(Error::invalid("threads", "must be at least 1, not 0"));
         }
         Ok(())
-    }
-}
-
-/// Refuses a `max_distance` that is not a positive number.
-pub(crate) fn validate_max_distance(max_distance: Option<f32>) -> Result<()> {
-    match max_distance {
-        Some(d) if d.is_nan() || d <= 0.0 => Err(Error::invalid(
-            "max_distance",
-            format!("must be positive, not {d}"),
-        )),
-        _ => Ok(()),
     }
 }
 

@@ -15,14 +15,11 @@ use pyo3::types::PyDict;
 
 use hmdist::accel::{Accel, BuildQuality, Kernel, RayCaster};
 use hmdist::error::Error;
-use hmdist::estimators::cubemap::Backend;
-use hmdist::estimators::photon::SourceKind;
 use hmdist::estimators::{registry, Gather, MethodConfig};
 use hmdist::image::HmdImage;
 use hmdist::points::{hmd_at, PointQuery, SurfacePoint};
 use hmdist::progress::{Progress, Silent};
 use hmdist::render::{render, RenderOptions};
-use hmdist::sampling::Weighting;
 use hmdist::scene::{default_display_scale, framing_camera, Camera, Mesh};
 
 create_exception!(_hmdist, DeviceError, PyException, "A GPU is missing or failed.");
@@ -326,7 +323,7 @@ impl PyScene {
             Some(k) => Some(k.as_slice().map_err(|e| value_error(e.to_string()))?.to_vec()),
             None => None,
         };
-        let gather = Gather::new(rays, parse_weighting(weighting)?).map_err(py_error)?;
+        let gather = Gather::new(rays, named("weighting", weighting)?).map_err(py_error)?;
         let query = PointQuery::new(gather, seed, max_distance).map_err(py_error)?;
         let accel = self.accel()?;
         let scene = &self.scene;
@@ -410,14 +407,11 @@ impl Progress for Stderr {
     fn finish(&self) {}
 }
 
-fn parse_weighting(name: &str) -> PyResult<Weighting> {
-    match name {
-        "cosine" => Ok(Weighting::Cosine),
-        "uniform" => Ok(Weighting::Uniform),
-        other => Err(value_error(format!(
-            "weighting must be cosine or uniform, not '{other}'"
-        ))),
-    }
+/// One of the library's named choices (`cosine`, `light`, `gpu`, `fast`, ...), by the name
+/// its serde form gives it; the message lists the names where it is none of them.
+fn named<T: serde::de::DeserializeOwned>(key: &str, name: &str) -> PyResult<T> {
+    serde_json::from_value(serde_json::Value::String(name.into()))
+        .map_err(|e| value_error(format!("{key}: {e}")))
 }
 
 /// The method configuration and render options from the keyword parameters; an unknown
@@ -430,38 +424,17 @@ fn configure(params: &Bound<'_, PyDict>) -> PyResult<(MethodConfig, RenderOption
         let bad = |e: PyErr| value_error(format!("{key}: {e}"));
         match key.as_str() {
             "rays" => c.rays = value.extract().map_err(bad)?,
-            "weighting" => c.weighting = parse_weighting(&value.extract::<String>().map_err(bad)?)?,
+            "weighting" => c.weighting = named(&key, &value.extract::<String>().map_err(bad)?)?,
             "rounds" => c.rounds = value.extract().map_err(bad)?,
             "ao_radius" => c.ao_radius = value.extract().map_err(bad)?,
             "tolerance" => c.tolerance = value.extract().map_err(bad)?,
             "min_rays" => c.min_rays = value.extract().map_err(bad)?,
             "max_rays" => c.max_rays = value.extract().map_err(bad)?,
             "cube_res" => c.cube_res = value.extract().map_err(bad)?,
-            "backend" => {
-                c.backend = match value.extract::<String>().map_err(bad)?.as_str() {
-                    "auto" => Backend::Auto,
-                    "gpu" => Backend::Gpu,
-                    "cpu" => Backend::Cpu,
-                    other => {
-                        return Err(value_error(format!(
-                            "backend must be auto, gpu or cpu, not '{other}'"
-                        )))
-                    }
-                }
-            }
+            "backend" => c.backend = named(&key, &value.extract::<String>().map_err(bad)?)?,
             "photons" => c.photons = value.extract().map_err(bad)?,
             "gather" => c.gather = value.extract().map_err(bad)?,
-            "source" => {
-                c.source = match value.extract::<String>().map_err(bad)?.as_str() {
-                    "light" => SourceKind::Light,
-                    "camera" => SourceKind::Camera,
-                    other => {
-                        return Err(value_error(format!(
-                            "source must be light or camera, not '{other}'"
-                        )))
-                    }
-                }
-            }
+            "source" => c.source = named(&key, &value.extract::<String>().map_err(bad)?)?,
             "max_bounces" => c.max_bounces = value.extract().map_err(bad)?,
             "absorption" => c.absorption = value.extract().map_err(bad)?,
             "max_radius" => c.max_radius = value.extract().map_err(bad)?,
@@ -469,18 +442,7 @@ fn configure(params: &Bound<'_, PyDict>) -> PyResult<(MethodConfig, RenderOption
             "threads" => o.threads = value.extract().map_err(bad)?,
             "max_distance" => o.max_distance = value.extract().map_err(bad)?,
             "size" => (o.width, o.height) = value.extract().map_err(bad)?,
-            "bvh" => {
-                o.bvh_quality = match value.extract::<String>().map_err(bad)?.as_str() {
-                    "auto" => BuildQuality::Auto,
-                    "fast" => BuildQuality::Fast,
-                    "high" => BuildQuality::High,
-                    other => {
-                        return Err(value_error(format!(
-                            "bvh must be auto, fast or high, not '{other}'"
-                        )))
-                    }
-                }
-            }
+            "bvh" => o.bvh_quality = named(&key, &value.extract::<String>().map_err(bad)?)?,
             other => return Err(value_error(format!("unknown parameter '{other}'"))),
         }
     }

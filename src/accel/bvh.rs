@@ -27,8 +27,9 @@ use super::{Hit, RayCaster};
 use crate::scene::Mesh;
 
 /// BVH build presets: build time against trace speed.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
 pub enum BuildQuality {
     /// `High` when the work to come casts at least [`AUTO_RAYS_PER_TRIANGLE`] rays per
     /// triangle, else `Fast` ([`BuildQuality::resolve`]); `High` where the work is unknown.

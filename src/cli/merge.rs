@@ -36,8 +36,11 @@ fn read_part(path: &std::path::Path) -> Result<Part> {
     let report: RenderReport =
         serde_json::from_str(&text).map_err(|e| Error::file(&json, format!("not a render report: {e}")))?;
     let image = exr::read(path)?;
-    let aovs = report.channels[1.min(report.channels.len())..]
+    // Channel 0 is Y, H itself.
+    let aovs = report
+        .channels
         .iter()
+        .skip(1)
         .map(|name| {
             Ok(AovImage {
                 aov: Aov::parse(name)?,

@@ -42,12 +42,7 @@ impl Adaptive {
     /// `max_rays`; rounds of `min_rays / 8` rays, `min_rays` a positive multiple of 8 and at
     /// most `max_rays`.
     pub fn new(weighting: Weighting, tolerance: f32, min_rays: u32, max_rays: u32) -> Result<Self> {
-        if tolerance.is_nan() || tolerance <= 0.0 {
-            return Err(Error::invalid(
-                "tolerance",
-                format!("must be positive, not {tolerance}"),
-            ));
-        }
+        Error::check_positive("tolerance", Some(tolerance))?;
         if min_rays == 0 || !min_rays.is_multiple_of(FIRST_ROUNDS) {
             let message = format!("must be a positive multiple of {FIRST_ROUNDS}, not {min_rays}");
             return Err(Error::invalid("min_rays", message));
@@ -67,9 +62,7 @@ impl Adaptive {
 
     /// The `ao` AOV's radius (positive); without one, the AO AOV is refused.
     pub fn with_ao_radius(self, ao_radius: Option<f32>) -> Result<Self> {
-        if let Some(r) = ao_radius.filter(|r| r.is_nan() || *r <= 0.0) {
-            return Err(Error::invalid("ao_radius", format!("must be positive, not {r}")));
-        }
+        Error::check_positive("ao_radius", ao_radius)?;
         Ok(Adaptive { ao_radius, ..self })
     }
 

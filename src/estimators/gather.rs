@@ -43,12 +43,13 @@ pub struct Gather {
 /// Rounds of gather rays when the `relerr` AOV is asked for and no rounds are named.
 pub const DEFAULT_ERROR_ROUNDS: u32 = 8;
 
-/// A gather's start: the origin offset off the surface, the normal whose hemisphere is
-/// sampled, and the triangle the rays leave (`None` where it is not known).
+/// A gather's start: the origin offset off the surface, the frame of the normal whose
+/// hemisphere is sampled, and the triangle the rays leave (`None` where it is not known).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct GatherStart {
     pub origin: Vec3,
-    pub normal: Vec3,
+    /// The frame around the normal whose hemisphere is sampled.
+    pub frame: Frame,
     pub leaving: Option<u32>,
 }
 
@@ -57,7 +58,7 @@ impl GatherStart {
     pub fn at_hit(hit: &Hit) -> Self {
         GatherStart {
             origin: hit.spawn_origin(hit.normal),
-            normal: hit.normal,
+            frame: Frame::from_normal(hit.normal),
             leaving: Some(hit.triangle),
         }
     }
@@ -92,9 +93,7 @@ impl Gather {
 
     /// The `ao` AOV's radius (positive); without one, the median of the image's H.
     pub fn with_ao_radius(self, ao_radius: Option<f32>) -> Result<Self> {
-        if let Some(r) = ao_radius.filter(|r| r.is_nan() || *r <= 0.0) {
-            return Err(Error::invalid("ao_radius", format!("must be positive, not {r}")));
-        }
+        Error::check_positive("ao_radius", ao_radius)?;
         Ok(Gather { ao_radius, ..self })
     }
 
@@ -127,7 +126,7 @@ impl Gather {
     #[inline]
     pub fn rays(&self, hit: &Hit, seed: u64, pixel: u64) -> (Vec3, impl Iterator<Item = Vec3> + '_) {
         let start = GatherStart::at_hit(hit);
-        let frame = Frame::from_normal(start.normal);
+        let frame = start.frame;
         (
             start.origin,
             self.directions(seed, pixel).map(move |w| frame.to_world(w)),
@@ -305,7 +304,7 @@ impl PointGather {
         n: u32,
         clamp: DistanceClamp,
     ) {
-        let frame = Frame::from_normal(start.normal);
+        let frame = start.frame;
         let mut inverse_sum = 0.0f64;
         for w in round_directions(self.weighting, seed, key, self.rounds, n) {
             let d = accel.hit_distance(start.origin, frame.to_world(w), clamp.max, start.leaving);

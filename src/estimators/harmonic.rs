@@ -30,9 +30,7 @@ impl HarmonicMean {
     /// Adds one sample distance (`+inf` for an escape, which adds `1/d = 0` unless clamped).
     #[inline(always)]
     pub fn add(&mut self, d: f32, clamp: DistanceClamp) {
-        let d = d.min(clamp.max).max(clamp.min);
-        self.inverse_sum += 1.0 / d as f64;
-        self.count += 1;
+        self.add_inverse(d, clamp);
     }
 
     /// Adds one sample distance, as [`HarmonicMean::add`], and returns the `1/d` it added.

@@ -120,11 +120,7 @@ impl PhotonEstimator {
                 format!("must be in [0, 1), not {a}"),
             ));
         }
-        if let Some(r) = params.max_radius {
-            if r.is_nan() || r <= 0.0 {
-                return Err(Error::invalid("max_radius", format!("must be positive, not {r}")));
-            }
-        }
+        Error::check_positive("max_radius", params.max_radius)?;
         check_memory(method, params.photons)?;
         Ok(PhotonEstimator {
             method,
