@@ -35,12 +35,12 @@ fn main() {
             match render(&scene, estimator.as_ref(), &options, &Silent) {
                 Ok(r) => {
                     let s = r.report.seconds.estimate;
-                    let cubemap = r.report.details.cubemap.as_ref();
+                    let device = r.report.details.device.as_ref();
                     println!(
                         "{:<8} {backend:<7} {rays:>5}  {s:>8.2}  {:>8.0}  {}",
                         estimator.method(),
                         (size * size) as f64 / s,
-                        cubemap.and_then(|c| c.adapter.as_deref()).unwrap_or("-")
+                        device.and_then(|d| d.adapter.as_deref()).unwrap_or("-")
                     );
                 }
                 Err(e) => println!("{:<8} {backend:<7} {rays:>5}  skipped: {e}", estimator.method()),

@@ -62,6 +62,8 @@ pub mod error;
 pub mod estimators;
 #[cfg(feature = "experiments")]
 pub mod experiments;
+#[cfg(feature = "gpu")]
+pub mod gpu;
 pub mod image;
 pub mod metrics;
 pub mod points;

@@ -154,7 +154,8 @@ impl PointQuery {
 
 /// H at each point of `scene` (whose BVH is `accel`): point `i`'s random numbers are keyed
 /// by `keys[i]`, or by `i` where `keys` is `None`. `+inf` where every ray escaped. Runs on
-/// the current rayon pool; the result does not depend on its size.
+/// the current rayon pool, whose size does not change the result; or on the GPU, as the
+/// query's [`Gather::with_backend`] says.
 pub fn hmd_at(
     scene: &Scene,
     accel: &Accel,
@@ -176,6 +177,13 @@ pub fn hmd_at(
         .iter()
         .map(|p| p.start(scene, extent))
         .collect::<Result<Vec<_>>>()?;
+    #[cfg(feature = "gpu")]
+    if let Some(gpu) = query.gather.gpu(accel)? {
+        let job = query.gather.gpu_job(query.seed, clamp, None);
+        let key = |i: usize| keys.map_or(i as u64, |k| k[i]);
+        let done = crate::gpu::gather::gather_points(&gpu, &job, &starts, key, &crate::progress::Silent)?;
+        return Ok(done.points.iter().map(|p| p.mean.value()).collect());
+    }
     Ok(starts
         .par_iter()
         .enumerate()

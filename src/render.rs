@@ -240,7 +240,7 @@ pub fn estimate(
     progress: &dyn Progress,
 ) -> Result<Estimate> {
     Ok(match estimator.prepare(context, gbuffer, progress)? {
-        Work::Done(estimate) => estimate,
+        Work::Done(estimate) => *estimate,
         Work::Pixels { work, phases, rays } => {
             let (hmd, aovs, pass) = pixel_pass(work.as_ref(), gbuffer, context.aovs, progress);
             let mut phases = phases;

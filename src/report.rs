@@ -84,6 +84,7 @@ impl RenderReport {
         let r = self;
         let p = &r.parameters;
         let rays = p.rays.unwrap_or(0);
+        let backend = r.details.device.as_ref().map_or("cpu", |d| d.backend.as_str());
         let what = match (&r.details.cubemap, &r.details.photon, &p.photon, &p.cubemap) {
             _ if p.adaptive.is_some() => format!(
                 "tolerance {}, {:.1} rays/pixel on average, {:.2} Mrays/s",
@@ -91,15 +92,13 @@ impl RenderReport {
                 r.details.mean_rays_per_pixel.unwrap_or(f64::NAN),
                 r.mrays_per_s.unwrap_or(f64::NAN)
             ),
-            (Some(c), _, _, Some(cp)) => {
-                format!("{rays} rays/pixel, R = {}, {} backend", cp.cube_res, c.backend)
-            }
+            (Some(_), _, _, Some(cp)) => format!("{rays} rays/pixel, R = {}, {backend} backend", cp.cube_res),
             (_, Some(d), Some(pp), _) => format!(
                 "{} photons, K = {}, {} holes, {:.0} queries/s",
                 d.photons_stored, pp.gather, d.holes, d.gather_queries_per_s
             ),
             _ => format!(
-                "{rays} rays/pixel, {:.2} Mrays/s",
+                "{rays} rays/pixel, {:.2} Mrays/s, {backend} backend",
                 r.mrays_per_s.unwrap_or(f64::NAN)
             ),
         };
@@ -192,6 +191,15 @@ pub struct PhaseSeconds {
     /// Photon methods: the K-nearest gathers.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gather: Option<f64>,
+    /// GPU gather: uploading the scene and the points, and compiling the shaders.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub gpu_upload: Option<f64>,
+    /// GPU gather: the dispatches that cast the rays.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub gpu_trace: Option<f64>,
+    /// GPU gather: reading the sums back.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub gpu_readback: Option<f64>,
 }
 
 /// A method's parameters. `rays` is there for every method (`null` for the photon methods);
@@ -274,6 +282,12 @@ pub struct Details {
     /// `adaptive`: rays cast per surface pixel, on average.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub mean_rays_per_pixel: Option<f64>,
+    /// `gather` and `cubemap`: where the work ran.
+    #[serde(flatten)]
+    pub device: Option<DeviceDetails>,
+    /// `gather` on the GPU: billions of rays cast per second of tracing.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub grays_per_s: Option<f64>,
     /// `cubemap`.
     #[serde(flatten)]
     pub cubemap: Option<CubemapDetails>,
@@ -282,13 +296,36 @@ pub struct Details {
     pub photon: Option<PhotonDetails>,
 }
 
-/// What the cube map did.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct CubemapDetails {
+/// The backend a method ran on.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DeviceDetails {
     /// `cpu` or `gpu`: the backend that ran.
     pub backend: String,
     /// The GPU adapter; `null` for the CPU backend.
     pub adapter: Option<String>,
+}
+
+impl DeviceDetails {
+    /// The CPU backend.
+    pub fn cpu() -> Self {
+        DeviceDetails {
+            backend: "cpu".into(),
+            adapter: None,
+        }
+    }
+
+    /// The GPU backend on `adapter`.
+    pub fn gpu(adapter: &str) -> Self {
+        DeviceDetails {
+            backend: "gpu".into(),
+            adapter: Some(adapter.into()),
+        }
+    }
+}
+
+/// What the cube map did.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct CubemapDetails {
     /// Texels filled: every texel of every hemicube on the GPU; one ray per texel looked up
     /// on the CPU.
     pub texels_rasterised: u64,

@@ -163,8 +163,9 @@ fn gpu_backend_gives_exact_distances_and_agrees_with_cpu_on_cube() {
         return;
     };
     let details = exact.report.details.cubemap.as_ref().expect("cube-map details");
-    println!("adapter: {:?}", details.adapter);
-    assert_eq!(details.backend, "gpu");
+    let device = exact.report.details.device.as_ref().expect("device details");
+    println!("adapter: {:?}", device.adapter);
+    assert_eq!(device.backend, "gpu");
     assert_eq!(details.escaped_lookups, 0, "the box is closed");
     let (gathered, _) = common::gather(&box_scene, 1, 1, 4096, Weighting::Cosine, None);
     let error = relative_difference(&exact.image, &gathered);

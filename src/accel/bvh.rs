@@ -139,6 +139,13 @@ impl Accel {
         self.kernel
     }
 
+    /// The wide BVH and, for each mesh triangle, the block lane that holds it (`8·block +
+    /// lane`): what the GPU uploads.
+    #[cfg(feature = "gpu")]
+    pub(crate) fn wide(&self) -> (&WideBvh, &[u32]) {
+        (&self.bvh, &self.location)
+    }
+
     /// Wide nodes, leaf blocks, and the bytes they take.
     pub fn size(&self) -> (usize, usize, usize) {
         (self.bvh.nodes.len(), self.bvh.blocks.len(), self.bvh.bytes())

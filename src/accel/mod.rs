@@ -28,7 +28,7 @@ mod kernel;
 mod sah;
 mod traverse;
 mod triangle;
-mod wide;
+pub(crate) mod wide;
 
 use glam::Vec3;
 

@@ -16,6 +16,7 @@
 
 use glam::Vec3;
 
+use super::Backend;
 use super::{
     Aov, AovSample, DistanceClamp, EstimateContext, Estimator, GBuffer, HarmonicMean, PixelPass, PixelWork,
     PixelWorker, Tally, Work,
@@ -23,7 +24,7 @@ use super::{
 use crate::accel::{Hit, RayCaster};
 use crate::error::{Error, Result};
 use crate::progress::Progress;
-use crate::report::{Details, GatherParameters, Parameters};
+use crate::report::{Details, DeviceDetails, GatherParameters, Parameters};
 use crate::sampling::{hemisphere, random_pair, strata, stratified, Frame, Weighting};
 
 /// Default gather rays per pixel for `hmdist render`: an 8 × 8 stratified grid, a clean
@@ -38,6 +39,20 @@ pub struct Gather {
     weighting: Weighting,
     rounds: u32,
     ao_radius: Option<f32>,
+    backend: Backend,
+    #[cfg_attr(not(feature = "gpu"), allow(dead_code))]
+    split: Option<DispatchSplit>,
+}
+
+/// How a gather's work is split into dispatches: at most `points` points and `rays` rays per
+/// point each. The result does not depend on it (tests check this); without
+/// [`Gather::with_dispatch_split`], dispatches take about half a second each.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DispatchSplit {
+    /// Points per dispatch.
+    pub points: u32,
+    /// Rays per point per dispatch.
+    pub rays: u32,
 }
 
 /// Rounds of gather rays when the `relerr` AOV is asked for and no rounds are named.
@@ -75,6 +90,8 @@ impl Gather {
             weighting,
             rounds: 1,
             ao_radius: None,
+            backend: Backend::Cpu,
+            split: None,
         })
     }
 
@@ -95,6 +112,58 @@ impl Gather {
     pub fn with_ao_radius(self, ao_radius: Option<f32>) -> Result<Self> {
         Error::check_positive("ao_radius", ao_radius)?;
         Ok(Gather { ao_radius, ..self })
+    }
+
+    /// The rays cast by `backend`: [`Backend::Gpu`] traces them in a compute shader
+    /// ([`crate::gpu`]), [`Backend::Auto`] does so where there is a hardware GPU. The default
+    /// is [`Backend::Cpu`] (`hmdist render`'s default is `auto`).
+    pub fn with_backend(self, backend: Backend) -> Self {
+        Gather { backend, ..self }
+    }
+
+    /// On the GPU, the work split into dispatches of at most `split`'s points and rays
+    /// instead of dispatches of about half a second. The result is the same: this is for
+    /// tests that check so.
+    pub fn with_dispatch_split(self, split: DispatchSplit) -> Self {
+        Gather {
+            split: Some(split),
+            ..self
+        }
+    }
+
+    /// The backend the rays are cast by.
+    pub fn backend(&self) -> Backend {
+        self.backend
+    }
+
+    /// The GPU to cast on, or `None` for the CPU: see [`Gather::with_backend`].
+    #[cfg(feature = "gpu")]
+    pub(crate) fn gpu(&self, accel: &crate::accel::Accel) -> Result<Option<crate::gpu::GpuScene>> {
+        use crate::gpu::GpuScene;
+        Ok(match self.backend {
+            Backend::Cpu => None,
+            Backend::Gpu => Some(GpuScene::new(accel, true)?),
+            // A software implementation (lavapipe) is slower than the CPU: auto wants hardware.
+            Backend::Auto if crate::gpu::hardware_adapter() => GpuScene::new(accel, false).ok(),
+            Backend::Auto => None,
+        })
+    }
+
+    /// The job a GPU gather does for this gather.
+    #[cfg(feature = "gpu")]
+    pub(crate) fn gpu_job(
+        &self,
+        seed: u64,
+        clamp: DistanceClamp,
+        ao_radius: Option<f32>,
+    ) -> crate::gpu::gather::GatherJob<'_> {
+        crate::gpu::gather::GatherJob {
+            gather: self,
+            seed,
+            clamp,
+            ao_radius,
+            split: self.split,
+        }
     }
 
     /// Independent rounds the rays are cast in.
@@ -195,16 +264,24 @@ impl Estimator for Gather {
             );
             return Err(Error::invalid("rounds", message));
         }
-        let ao_radius = match (self.ao_radius, context.aovs.contains(&Aov::Ao)) {
-            (Some(r), true) => Some(r),
+        let ao = self.ao_radius(context)?;
+        #[cfg(feature = "gpu")]
+        if let Some(gpu) = self.gpu(context.accel)? {
+            return crate::gpu::gather::estimate(&gpu, self, context, gbuffer, ao, progress)
+                .map(|e| Work::Done(Box::new(e)));
+        }
+        #[cfg(not(feature = "gpu"))]
+        if self.backend == Backend::Gpu {
+            return Err(Error::device(
+                crate::error::DeviceErrorKind::NoAdapter,
+                "this hmdist was built without the gpu feature: use the cpu backend",
+            ));
+        }
+        let ao_radius = match ao {
+            AoRadius::Given(r) => Some(r),
             // The default radius is the median of H: a first pass finds it.
-            (None, true) if context.whole_image => Some(median_hmd(self, context, gbuffer, progress)),
-            (None, true) => {
-                let message =
-                    "is needed for the ao AOV of a shard: the default, the median of H, is the whole image's";
-                return Err(Error::invalid("ao_radius", message));
-            }
-            (_, false) => None,
+            AoRadius::Median => Some(median_hmd(self, context, gbuffer, progress)),
+            AoRadius::None => None,
         };
         Ok(Work::Pixels {
             work: Box::new(GatherPixels {
@@ -216,6 +293,42 @@ impl Estimator for Gather {
             rays: None,
         })
     }
+}
+
+/// The `ao` AOV's radius, where it is asked for.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum AoRadius {
+    /// The AOV is not asked for.
+    None,
+    /// As given.
+    Given(f32),
+    /// The median of the image's H, from a first pass without AOVs.
+    Median,
+}
+
+impl Gather {
+    fn ao_radius(&self, context: &EstimateContext) -> Result<AoRadius> {
+        Ok(match (self.ao_radius, context.aovs.contains(&Aov::Ao)) {
+            (Some(r), true) => AoRadius::Given(r),
+            (None, true) if context.whole_image => AoRadius::Median,
+            (None, true) => {
+                let message =
+                    "is needed for the ao AOV of a shard: the default, the median of H, is the whole image's";
+                return Err(Error::invalid("ao_radius", message));
+            }
+            (_, false) => AoRadius::None,
+        })
+    }
+}
+
+/// The median of the finite values of `hmd` (+inf where none is finite).
+pub(crate) fn median_finite(hmd: impl IntoIterator<Item = f32>) -> f32 {
+    let mut finite: Vec<f32> = hmd.into_iter().filter(|h| h.is_finite()).collect();
+    if finite.is_empty() {
+        return f32::INFINITY;
+    }
+    let middle = finite.len() / 2;
+    *finite.select_nth_unstable_by(middle, f32::total_cmp).1
 }
 
 /// The median of the finite H of the image, from a pass without AOVs (the `ao` AOV's default
@@ -231,12 +344,7 @@ fn median_hmd(gather: &Gather, context: &EstimateContext, gbuffer: &GBuffer, pro
         ao_radius: None,
     };
     let (hmd, _, _) = crate::render::pixel_pass(&pass, gbuffer, &[], progress);
-    let mut finite: Vec<f32> = hmd.into_iter().filter(|h| h.is_finite()).collect();
-    if finite.is_empty() {
-        return f32::INFINITY;
-    }
-    let middle = finite.len() / 2;
-    *finite.select_nth_unstable_by(middle, f32::total_cmp).1
+    median_finite(hmd)
 }
 
 /// The directions of round `round` (of `n` rays) of the point keyed `key`, in its local frame:
@@ -323,12 +431,40 @@ impl PointGather {
                 }
             }
         }
+        self.end_round(inverse_sum, n);
+    }
+
+    /// Counts a round of `n` rays whose `1/d` summed to `inverse_sum`.
+    fn end_round(&mut self, inverse_sum: f64, n: u32) {
         self.rays += n;
         self.rounds += 1;
         let m = inverse_sum / n as f64;
         let delta = m - self.round_mean;
         self.round_mean += delta / self.rounds as f64;
         self.round_m2 += delta * (m - self.round_mean);
+    }
+
+    /// A point gathered elsewhere (on the GPU): the sums of `1/d` of its rounds of `n` rays
+    /// each, in order; its escaped rays, smallest distance, and AO weights (open, total).
+    #[cfg_attr(not(feature = "gpu"), allow(dead_code))]
+    pub fn from_rounds(
+        weighting: Weighting,
+        ao_radius: Option<f32>,
+        round_sums: impl IntoIterator<Item = f64>,
+        n: u32,
+        (escaped, dmin): (u32, f32),
+        (ao_open, ao_total): (f64, f64),
+    ) -> Self {
+        let mut point = PointGather::new(weighting, ao_radius);
+        for sum in round_sums {
+            point.mean.add_sum(sum, n);
+            point.end_round(sum, n);
+        }
+        point.escaped = escaped;
+        point.dmin = dmin;
+        point.ao_open = ao_open;
+        point.ao_total = ao_total;
+        point
     }
 
     /// Relative standard error of H: that of the mean of `1/d` over the rounds; NaN with
@@ -384,6 +520,7 @@ impl PixelWork for GatherPixels<'_> {
     fn details(&self, _: &PixelPass) -> Details {
         Details {
             ao_radius: self.ao_radius,
+            device: Some(DeviceDetails::cpu()),
             ..Details::default()
         }
     }

@@ -43,6 +43,13 @@ impl HarmonicMean {
         inverse
     }
 
+    /// Adds `count` samples whose `1/d` (clamped) sum to `inverse_sum`.
+    #[inline]
+    pub fn add_sum(&mut self, inverse_sum: f64, count: u32) {
+        self.inverse_sum += inverse_sum;
+        self.count += count;
+    }
+
     /// `N / Σ 1/d`: `+inf` if every sample escaped, NaN if there were none.
     pub fn value(&self) -> f32 {
         if self.count == 0 {

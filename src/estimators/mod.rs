@@ -25,7 +25,7 @@ pub mod registry;
 
 pub use adaptive::Adaptive;
 pub use aov::{Aov, AovImage, AovSample};
-pub use cubemap::Cubemap;
+pub use cubemap::{Backend, Cubemap};
 pub use gather::Gather;
 pub use harmonic::{DistanceClamp, HarmonicMean};
 pub use photon::PhotonEstimator;
@@ -153,7 +153,7 @@ pub enum Work<'a> {
         rays: Option<RayCount>,
     },
     /// The whole image, already estimated.
-    Done(Estimate),
+    Done(Box<Estimate>),
 }
 
 /// An estimator's per-pixel work on one image, shared by the worker threads.

@@ -60,11 +60,8 @@ pub struct MethodConfig {
         arg(long, default_value_t = cubemap::DEFAULT_CUBE_RES, help_heading = "Cube map")
     )]
     pub cube_res: u32,
-    /// Who builds the cube maps.
-    #[cfg_attr(
-        feature = "cli",
-        arg(long, value_enum, default_value_t = Backend::Auto, help_heading = "Cube map")
-    )]
+    /// Where gather casts its rays and the cube map builds its hemicubes.
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Backend::Auto))]
     pub backend: Backend,
     /// Photons stored P, exactly.
     #[cfg_attr(
@@ -188,10 +185,12 @@ pub const METHODS: &[MethodEntry] = &[
     MethodEntry {
         name: "gather",
         summary: "Ray-traced final gathering (SPEC §3.1)",
-        parameters: &["rays", "weighting", "rounds", "ao_radius"],
+        parameters: &["rays", "weighting", "rounds", "ao_radius", "backend"],
         build: |c| {
             let gather = c.gather()?.with_rounds(c.rounds.unwrap_or(1))?;
-            Ok(Box::new(gather.with_ao_radius(c.ao_radius)?))
+            Ok(Box::new(
+                gather.with_ao_radius(c.ao_radius)?.with_backend(c.backend),
+            ))
         },
     },
     MethodEntry {

@@ -8,7 +8,7 @@
 use super::Cubemap;
 use crate::accel::{Hit, RayCaster};
 use crate::estimators::{AovSample, EstimateContext, HarmonicMean, PixelPass, PixelWork, PixelWorker, Tally};
-use crate::report::{CubemapDetails, Details, PhaseSeconds};
+use crate::report::{CubemapDetails, Details, DeviceDetails, PhaseSeconds};
 use crate::sampling::Frame;
 
 /// The CPU cube map on one image.
@@ -43,9 +43,8 @@ impl PixelWork for CpuPixels<'_> {
 
     fn details(&self, pass: &PixelPass) -> Details {
         Details {
+            device: Some(DeviceDetails::cpu()),
             cubemap: Some(CubemapDetails {
-                backend: "cpu".into(),
-                adapter: None,
                 // The CPU fills only the texels that are looked up, one ray each.
                 texels_rasterised: pass.tally.rays,
                 texels_per_hemicube: self.cubemap.hemicube.texel_count() as u64,

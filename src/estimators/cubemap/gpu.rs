@@ -17,7 +17,7 @@ use super::Cubemap;
 use crate::error::{DeviceErrorKind, Error, Result};
 use crate::estimators::{Estimate, EstimateContext, GBuffer};
 use crate::progress::Progress;
-use crate::report::{CubemapDetails, Details, PhaseSeconds};
+use crate::report::{CubemapDetails, Details, DeviceDetails, PhaseSeconds};
 use crate::sampling::{strata, Frame, Weighting};
 
 /// Largest atlas side we ask for (the device limit may be lower).
@@ -86,48 +86,21 @@ pub struct Gpu {
 }
 
 impl Gpu {
-    /// The first Vulkan, Metal or DX12 adapter with clip distances, if any. (Not GL: wgpu's GL
-    /// fallback cannot render to R32Float.) A software rasteriser (Mesa's lavapipe) is taken
-    /// only when `allow_software`.
+    /// The first Vulkan, Metal or DX12 adapter with clip distances, if any (see
+    /// [`crate::gpu`]). A software rasteriser (Mesa's lavapipe) is taken only when
+    /// `allow_software`.
     pub fn open(allow_software: bool) -> Result<Gpu> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
-            backends: wgpu::Backends::VULKAN | wgpu::Backends::METAL | wgpu::Backends::DX12,
-            ..wgpu::InstanceDescriptor::new_without_display_handle_from_env()
-        });
-        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-            power_preference: wgpu::PowerPreference::HighPerformance,
-            force_fallback_adapter: false,
-            compatible_surface: None,
-            ..Default::default()
-        }))
-        .map_err(|e| {
-            let message = format!("no Vulkan, Metal or DX12 adapter ({e})");
-            Error::device(DeviceErrorKind::NoAdapter, message)
-        })?;
-        let info = adapter.get_info();
-        if info.device_type == wgpu::DeviceType::Cpu && !allow_software {
-            let message = format!("adapter '{}' is a software rasteriser", info.name);
-            return Err(Error::device(DeviceErrorKind::NoAdapter, message));
-        }
-        if !adapter.features().contains(wgpu::Features::CLIP_DISTANCES) {
-            let message = format!("adapter '{}' lacks clip distances", info.name);
-            return Err(Error::device(DeviceErrorKind::Unsupported, message));
-        }
-        let limits = adapter.limits();
-        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-            label: Some("hmdist hemicubes"),
-            required_features: wgpu::Features::CLIP_DISTANCES,
-            required_limits: limits.clone(),
-            ..Default::default()
-        }))
-        .map_err(|e| {
-            let message = format!("adapter '{}' refused a device: {e}", info.name);
-            Error::device(DeviceErrorKind::Failed, message)
-        })?;
+        let crate::gpu::Device {
+            device,
+            queue,
+            adapter_name,
+            limits,
+            ..
+        } = crate::gpu::Device::open("hmdist hemicubes", allow_software, wgpu::Features::CLIP_DISTANCES)?;
         Ok(Gpu {
             device,
             queue,
-            adapter_name: format!("{} ({:?})", info.name, info.backend),
+            adapter_name,
             max_texture: limits.max_texture_dimension_2d,
         })
     }
@@ -154,9 +127,8 @@ pub fn estimate(
             ..PhaseSeconds::default()
         },
         details: Details {
+            device: Some(DeviceDetails::gpu(&gpu.adapter_name)),
             cubemap: Some(CubemapDetails {
-                backend: "gpu".into(),
-                adapter: Some(gpu.adapter_name.clone()),
                 texels_rasterised: result.texels_rasterised,
                 texels_per_hemicube: cubemap.hemicube.texel_count() as u64,
                 lookups,
@@ -185,26 +157,17 @@ fn rasterise(
     let capacity = (cols * rows) as usize;
     let atlas_size = (cols * 2 * r, rows * 6 * r);
     // Catch the device's errors here rather than let wgpu panic on them.
-    let out_of_memory = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-    let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let result = estimate_batches(
-        gpu,
-        cubemap,
-        context,
-        gbuffer,
-        progress,
-        atlas_size,
-        (cols, capacity),
-    );
-    for (scope, kind) in [
-        (validation, DeviceErrorKind::Failed),
-        (out_of_memory, DeviceErrorKind::OutOfMemory),
-    ] {
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(Error::device(kind, format!("the cube-map pipeline failed: {e}")));
-        }
-    }
-    result
+    crate::gpu::checked(&gpu.device, "the cube-map pipeline", || {
+        estimate_batches(
+            gpu,
+            cubemap,
+            context,
+            gbuffer,
+            progress,
+            atlas_size,
+            (cols, capacity),
+        )
+    })
 }
 
 fn estimate_batches(
@@ -306,7 +269,14 @@ impl Pipeline {
         let device = &gpu.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("hemicube.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("hemicube.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(
+                [
+                    include_str!("hemicube.wgsl"),
+                    include_str!("../../gpu/sampling.wgsl"),
+                ]
+                .concat()
+                .into(),
+            ),
         });
         let mesh = &context.scene.mesh;
         let positions: Vec<[f32; 3]> = mesh.positions.iter().map(|p| p.to_array()).collect();

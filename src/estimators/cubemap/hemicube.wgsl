@@ -1,6 +1,5 @@
-// Hemicube rasterisation and lookup on the GPU (SPEC §3.2). Mirrors hemicube.rs and
-// sampling.rs: the same texel layout, the same counter-based random numbers (64-bit integer
-// arithmetic emulated on pairs of u32), the same stratification and hemisphere maps.
+// Hemicube rasterisation and lookup on the GPU (SPEC §3.2). Mirrors hemicube.rs: the same
+// texel layout. The gather directions come from src/gpu/sampling.wgsl, which the host appends.
 enable clip_distances;
 
 struct Params {
@@ -116,71 +115,6 @@ struct Lookup {
 }
 @group(0) @binding(3) var<storage, read_write> results: array<Lookup>;
 
-// 64-bit integers as vec2(lo, hi).
-fn mul_hi32(x: u32, y: u32) -> u32 {
-    let x0 = x & 0xffffu;
-    let x1 = x >> 16u;
-    let y0 = y & 0xffffu;
-    let y1 = y >> 16u;
-    let p00 = x0 * y0;
-    let p01 = x0 * y1;
-    let p10 = x1 * y0;
-    let p11 = x1 * y1;
-    let mid = (p00 >> 16u) + (p01 & 0xffffu) + (p10 & 0xffffu);
-    return p11 + (p01 >> 16u) + (p10 >> 16u) + (mid >> 16u);
-}
-
-fn mul64(a: vec2<u32>, b: vec2<u32>) -> vec2<u32> {
-    return vec2(a.x * b.x, mul_hi32(a.x, b.x) + a.x * b.y + a.y * b.x);
-}
-
-fn add64(a: vec2<u32>, b: vec2<u32>) -> vec2<u32> {
-    let lo = a.x + b.x;
-    return vec2(lo, a.y + b.y + select(0u, 1u, lo < a.x));
-}
-
-fn shr64(a: vec2<u32>, n: u32) -> vec2<u32> {
-    // 0 < n < 32
-    return vec2((a.x >> n) | (a.y << (32u - n)), a.y >> n);
-}
-
-fn shr64_big(a: vec2<u32>, n: u32) -> vec2<u32> {
-    // 32 <= n < 64
-    return vec2(a.y >> (n - 32u), 0u);
-}
-
-fn mix64(x0: vec2<u32>) -> vec2<u32> {
-    var x = x0;
-    x = x ^ shr64(x, 27u);
-    x = mul64(x, vec2(0x2BA7B653u, 0x3C79AC49u));
-    x = x ^ shr64_big(x, 33u);
-    x = mul64(x, vec2(0x4AC4AE35u, 0x1C69B3F7u));
-    return x ^ shr64(x, 27u);
-}
-
-const GOLDEN: vec2<u32> = vec2(0x7F4A7C15u, 0x9E3779B9u);
-
-fn random_pair(seed: vec2<u32>, stream: vec2<u32>, counter: u32) -> vec2<f32> {
-    let key = mix64(seed ^ GOLDEN);
-    let bits = mix64(add64(mix64(key ^ stream), mul64(vec2(counter, 0u), GOLDEN)));
-    let scale = 1.0 / 16777216.0;
-    return vec2(f32(bits.y >> 8u) * scale, f32((shr64(bits, 8u).x) & 0xffffffu) * scale);
-}
-
-fn hemisphere(u: vec2<f32>) -> vec3<f32> {
-    var sin_theta: f32;
-    var cos_theta: f32;
-    if params.weighting == 0u {
-        sin_theta = sqrt(u.x);
-        cos_theta = sqrt(1.0 - u.x);
-    } else {
-        cos_theta = 1.0 - u.x;
-        sin_theta = sqrt(max(1.0 - cos_theta * cos_theta, 0.0));
-    }
-    let phi = 6.2831855 * u.y;
-    return vec3(cos(phi) * sin_theta, sin(phi) * sin_theta, cos_theta);
-}
-
 @compute @workgroup_size(64)
 fn lookup(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = id.x;
@@ -191,14 +125,12 @@ fn lookup(@builtin(global_invocation_id) id: vec3<u32>) {
     let a = params.grid_a;
     let b = params.grid_b;
     let r = params.resolution;
-    let one_below = 1.0 - 1.1920929e-7;
     var sum = 0.0;
     var carry = 0.0; // Kahan summation: up to 65,536 terms in f32
     var escaped = 0u;
     for (var j = 0u; j < params.rays; j++) {
-        let xi = random_pair(params.seed, vec2(pixel, 0u), j);
-        let u = vec2(min((f32(j % a) + xi.x) / f32(a), one_below), min((f32(j / a) + xi.y) / f32(b), one_below));
-        let w = hemisphere(u);
+        let u = stratified(j, a, b, random_pair(params.seed, vec2(pixel, 0u), j));
+        let w = hemisphere(params.weighting, u);
         let m = abs(w);
         var face = 0u;
         if !(w.z >= m.x && w.z >= m.y) {

@@ -25,18 +25,20 @@ pub const DEFAULT_CUBE_RES: u32 = 64;
 /// Largest `R` accepted: a 2R × 2R top face must fit a GPU texture comfortably.
 pub const MAX_CUBE_RES: u32 = 1024;
 
-/// Which implementation builds the cube maps.
+/// Where an estimator runs: `gather`'s rays and the cube map's hemicubes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Backend {
-    /// gpu if a hardware adapter exists, else cpu (a software rasteriser such as lavapipe is
-    /// slower than the CPU backend).
+    /// gpu if a hardware adapter exists, else cpu (a software implementation such as Mesa's
+    /// lavapipe is slower than the CPU backend).
     #[default]
     Auto,
-    /// wgpu rasterisation (Vulkan, Metal or DX12).
+    /// wgpu (Vulkan, Metal or DX12), a software implementation included: gather's rays in a
+    /// compute shader, the cube map by rasterisation.
     Gpu,
-    /// Ray casting through each texel looked up.
+    /// The CPU: gather's rays by the SIMD kernels, the cube map by casting a ray through each
+    /// texel looked up.
     Cpu,
 }
 
@@ -112,7 +114,7 @@ impl Estimator for Cubemap {
     ) -> Result<Work<'a>> {
         #[cfg(feature = "gpu")]
         if let Some(gpu) = self.gpu()? {
-            return gpu::estimate(&gpu, self, context, gbuffer, progress).map(Work::Done);
+            return gpu::estimate(&gpu, self, context, gbuffer, progress).map(|e| Work::Done(Box::new(e)));
         }
         #[cfg(not(feature = "gpu"))]
         if self.backend == Backend::Gpu {

@@ -1,0 +1,296 @@
+//! Final gathering on the GPU (`gather.wgsl`): each point's rays, its sums of `1/d` per round
+//! and its AOV figures, with the CPU's random numbers and in the CPU's ray order.
+//!
+//! The work is split into dispatches of at most [`MAX_POINTS`] points and a number of rays
+//! per point chosen so that one dispatch takes about [`DISPATCH_SECONDS`] (long submissions
+//! trip driver timeouts, and the progress bar moves); a point's running sums stay on the GPU
+//! between dispatches, so the split does not change a bit of the result.
+
+use std::time::Instant;
+
+use bytemuck::{Pod, Zeroable};
+
+use super::scene::{leaving_bits, shader_t_max, DispatchSplit, GpuScene};
+use crate::error::Result;
+use crate::estimators::gather::{median_finite, AoRadius, GatherStart, PointGather};
+use crate::estimators::{
+    AovImage, AovSample, DistanceClamp, Estimate, EstimateContext, GBuffer, Gather, RayCount, Tally,
+};
+use crate::progress::Progress;
+use crate::report::{Details, DeviceDetails, PhaseSeconds};
+use crate::sampling::{strata, Weighting};
+
+/// Points per dispatch at most: 1 M points hold 64 MB of starts and 32 MB of state.
+pub const MAX_POINTS: u32 = 1 << 20;
+/// What a dispatch should take, when the split is chosen automatically.
+const DISPATCH_SECONDS: f64 = 0.5;
+/// Rays of the first dispatch of a batch, over all its points (then scaled to the time taken).
+const FIRST_DISPATCH_RAYS: u64 = 1 << 20;
+/// Rays per point per dispatch at most on a software implementation. Mesa's llvmpipe
+/// (lavapipe) caps every shader loop at 65,535 iterations in one invocation, counted over the
+/// whole invocation rather than per entry into the loop: a point casting ~100 rays in one
+/// dispatch ran out, and its later rays came back as misses. 16 rays stay far below the cap
+/// (a ray visits tens of nodes in our scenes).
+const SOFTWARE_MAX_RAYS: u32 = 16;
+
+/// `GatherParams` in `gather.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Params {
+    count: u32,
+    first_ray: u32,
+    end_ray: u32,
+    per_round: u32,
+    rounds: u32,
+    grid_a: u32,
+    grid_b: u32,
+    weighting: u32,
+    seed: [u32; 2],
+    d_min: f32,
+    t_max: f32,
+    has_max: u32,
+    has_ao: u32,
+    ao_radius: f32,
+    padding: u32,
+}
+
+/// `State` in `gather.wgsl`: escaped, dmin, AO open (value, carry), AO total (value,
+/// carry), padding.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct State {
+    escaped: u32,
+    dmin: f32,
+    ao_open: [f32; 2],
+    ao_total: [f32; 2],
+    padding: [u32; 2],
+}
+
+/// A gather on the GPU: each point's figures and the seconds of each step.
+pub(crate) struct GpuGather {
+    /// Per point, in the order given.
+    pub points: Vec<PointGather>,
+    pub upload_seconds: f64,
+    pub trace_seconds: f64,
+    pub readback_seconds: f64,
+}
+
+/// What to gather: `gather`'s rays with random numbers of `seed`, distances clamped by
+/// `clamp`, the `ao` AOV's figures where `ao_radius` is given.
+#[derive(Clone, Copy)]
+pub(crate) struct GatherJob<'a> {
+    pub gather: &'a Gather,
+    pub seed: u64,
+    pub clamp: DistanceClamp,
+    pub ao_radius: Option<f32>,
+    pub split: Option<DispatchSplit>,
+}
+
+/// Gathers at `starts`, point `i`'s random numbers keyed by `key(i)`.
+pub(crate) fn gather_points(
+    scene: &GpuScene,
+    job: &GatherJob,
+    starts: &[GatherStart],
+    key: impl Fn(usize) -> u64,
+    progress: &dyn Progress,
+) -> Result<GpuGather> {
+    let gather = job.gather;
+    let rays = gather.rays_per_point();
+    let rounds = gather.rounds();
+    let per_round = rays / rounds;
+    let (grid_a, grid_b) = strata(per_round);
+    let base = Params {
+        count: 0,
+        first_ray: 0,
+        end_ray: 0,
+        per_round,
+        rounds,
+        grid_a,
+        grid_b,
+        weighting: (gather.weighting() == Weighting::Uniform) as u32,
+        seed: [job.seed as u32, (job.seed >> 32) as u32],
+        d_min: job.clamp.min,
+        t_max: shader_t_max(job.clamp.max),
+        has_max: job.clamp.max.is_finite() as u32,
+        has_ao: job.ao_radius.is_some() as u32,
+        ao_radius: job.ao_radius.unwrap_or(0.0),
+        padding: 0,
+    };
+    let batch_points = job.split.map_or(MAX_POINTS, |s| s.points.clamp(1, MAX_POINTS)) as usize;
+    let mut out = GpuGather {
+        points: Vec::with_capacity(starts.len()),
+        upload_seconds: 0.0,
+        trace_seconds: 0.0,
+        readback_seconds: 0.0,
+    };
+    progress.start("gather (gpu)", starts.len() as u64 * rays as u64);
+    let device = &scene.device;
+    for (b, batch) in starts.chunks(batch_points).enumerate() {
+        let first_point = b * batch_points;
+        let clock = Instant::now();
+        let packed: Vec<[[f32; 4]; 4]> = batch
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let k = key(first_point + i);
+                let (o, f) = (s.origin, s.frame);
+                [
+                    [o.x, o.y, o.z, leaving_bits(s.leaving)],
+                    [f.t.x, f.t.y, f.t.z, f32::from_bits(k as u32)],
+                    [f.b.x, f.b.y, f.b.z, f32::from_bits((k >> 32) as u32)],
+                    [f.n.x, f.n.y, f.n.z, 0.0],
+                ]
+            })
+            .collect();
+        let initial = State {
+            escaped: 0,
+            dmin: f32::INFINITY,
+            ao_open: [0.0; 2],
+            ao_total: [0.0; 2],
+            padding: [0; 2],
+        };
+        let (states, sums) = device.checked("the GPU gather", || {
+            let copy = wgpu::BufferUsages::COPY_SRC;
+            let params = device.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("gather params"),
+                size: std::mem::size_of::<Params>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let start_buffer = device.storage(
+                "starts",
+                bytemuck::cast_slice(&packed),
+                wgpu::BufferUsages::empty(),
+            );
+            let states = device.storage("states", bytemuck::cast_slice(&vec![initial; batch.len()]), copy);
+            let sums = device.storage("sums", &vec![0u8; batch.len() * rounds as usize * 8], copy);
+            let groups = scene.bind_groups(&scene.gather, &[&params, &start_buffer, &states, &sums]);
+            device.wait();
+            out.upload_seconds += clock.elapsed().as_secs_f64();
+
+            let clock = Instant::now();
+            let mut first_ray = 0u32;
+            let most = if device.software { SOFTWARE_MAX_RAYS } else { rays };
+            let mut step = match job.split {
+                Some(split) => split.rays.clamp(1, most),
+                None => (FIRST_DISPATCH_RAYS / batch.len() as u64).clamp(1, most as u64) as u32,
+            };
+            while first_ray < rays {
+                let end_ray = first_ray.saturating_add(step).min(rays);
+                let dispatch = Params {
+                    count: batch.len() as u32,
+                    first_ray,
+                    end_ray,
+                    ..base
+                };
+                device
+                    .queue
+                    .write_buffer(&params, 0, bytemuck::bytes_of(&dispatch));
+                let took = Instant::now();
+                scene.dispatch(&scene.gather, &groups, batch.len() as u32);
+                let seconds = took.elapsed().as_secs_f64();
+                progress.advance(batch.len() as u64 * (end_ray - first_ray) as u64);
+                if job.split.is_none() {
+                    // Aim the next dispatch at DISPATCH_SECONDS, growing at most 16-fold.
+                    let scale = (DISPATCH_SECONDS / seconds.max(1e-4)).clamp(0.25, 16.0);
+                    step = ((step as f64 * scale) as u32).clamp(1, most);
+                }
+                first_ray = end_ray;
+            }
+            out.trace_seconds += clock.elapsed().as_secs_f64();
+            let clock = Instant::now();
+            let read = (device.read_back(&states)?, device.read_back(&sums)?);
+            out.readback_seconds += clock.elapsed().as_secs_f64();
+            Ok(read)
+        })?;
+        let states: Vec<State> = bytemuck::pod_collect_to_vec(&states);
+        let sums: Vec<[f32; 2]> = bytemuck::pod_collect_to_vec(&sums);
+        // A Kahan sum is its value less its carry.
+        let compensated = |[value, carry]: [f32; 2]| value as f64 - carry as f64;
+        for (i, state) in states.iter().enumerate() {
+            let round_sums = &sums[i * rounds as usize..(i + 1) * rounds as usize];
+            out.points.push(PointGather::from_rounds(
+                gather.weighting(),
+                job.ao_radius,
+                round_sums.iter().map(|&s| compensated(s)),
+                per_round,
+                (state.escaped, state.dmin),
+                (compensated(state.ao_open), compensated(state.ao_total)),
+            ));
+        }
+    }
+    progress.finish();
+    Ok(out)
+}
+
+/// `gather` on the GPU over the whole image: H, the AOVs asked for, and what it took.
+pub(crate) fn estimate(
+    scene: &GpuScene,
+    gather: &Gather,
+    context: &EstimateContext,
+    gbuffer: &GBuffer,
+    ao: AoRadius,
+    progress: &dyn Progress,
+) -> Result<Estimate> {
+    let (pixels, starts): (Vec<usize>, Vec<GatherStart>) = gbuffer
+        .points
+        .iter()
+        .enumerate()
+        .filter_map(|(i, p)| p.as_ref().map(|hit| (i, GatherStart::at_hit(hit))))
+        .unzip();
+    let key = |i: usize| pixels[i] as u64;
+    let mut extra = 0.0;
+    let ao_radius = match ao {
+        AoRadius::None => None,
+        AoRadius::Given(r) => Some(r),
+        AoRadius::Median => {
+            // The default radius is the median of H: a first pass finds it.
+            let job = gather.gpu_job(context.seed, context.clamp, None);
+            let first = gather_points(scene, &job, &starts, key, progress)?;
+            extra = first.trace_seconds;
+            Some(median_finite(first.points.iter().map(|p| p.mean.value())))
+        }
+    };
+    let job = gather.gpu_job(context.seed, context.clamp, ao_radius);
+    let done = gather_points(scene, &job, &starts, key, progress)?;
+
+    let mut hmd = vec![f32::NAN; gbuffer.points.len()];
+    let mut samples = vec![AovSample::default(); if context.aovs.is_empty() { 0 } else { hmd.len() }];
+    let mut tally = Tally::default();
+    let mut scratch = AovSample::default();
+    for (&pixel, point) in pixels.iter().zip(&done.points) {
+        hmd[pixel] = point.mean.value();
+        let aov = samples.get_mut(pixel).unwrap_or(&mut scratch);
+        point.finish(&mut tally, aov);
+    }
+    let aovs = context
+        .aovs
+        .iter()
+        .map(|&aov| AovImage {
+            aov,
+            data: samples.iter().map(|s| s.get(aov)).collect(),
+        })
+        .collect();
+    let trace_seconds = done.trace_seconds + extra;
+    Ok(Estimate {
+        hmd,
+        rays: Some(RayCount {
+            cast: tally.rays,
+            escaped: tally.escaped,
+            seconds: done.trace_seconds,
+        }),
+        phases: PhaseSeconds {
+            gpu_upload: Some(scene.upload_seconds + done.upload_seconds),
+            gpu_trace: Some(trace_seconds),
+            gpu_readback: Some(done.readback_seconds),
+            ..PhaseSeconds::default()
+        },
+        aovs,
+        details: Details {
+            ao_radius,
+            device: Some(DeviceDetails::gpu(scene.adapter())),
+            grays_per_s: Some(tally.rays as f64 / done.trace_seconds.max(1e-9) / 1e9),
+            ..Details::default()
+        },
+    })
+}
