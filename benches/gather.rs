@@ -9,6 +9,12 @@
 //! casts about 16.8 M rays), `HMDIST_BENCH_PRESETS=fast,high`, `HMDIST_BENCH_KERNELS=` (e.g.
 //! `scalar,avx2,avx512`; default: the best kernel).
 //! Figures, not pass/fail: compare as ratios within one run (timings drift ±10 %).
+//!
+//! Then the GPU backend (`gather --backend gpu`), where a Vulkan, Metal or DX12 adapter
+//! exists: per scene and ray count, upload, trace and readback seconds, seconds per image and
+//! Mrays/s of tracing. `HMDIST_BENCH_GPU_RAYS=256,4096` (default), `HMDIST_BENCH_GPU_SIZE` (image side;
+//! default 1024 on a hardware GPU, 64 on a software one such as lavapipe, where the figures
+//! are only a functional check), `HMDIST_BENCH_GPU=0` skips it.
 
 use std::time::Instant;
 
@@ -72,6 +78,64 @@ fn main() {
                 }
                 accel = Some(a);
             }
+        }
+    }
+    if std::env::var("HMDIST_BENCH_GPU").as_deref() != Ok("0") {
+        gpu();
+    }
+}
+
+/// The GPU backend's figures (see the module docs).
+fn gpu() {
+    println!();
+    println!("scene  rays  pixels  upload_s  trace_s  readback_s  s/image  Mrays/s  escaped  adapter");
+    for name in list("HMDIST_BENCH_SCENES", "cube,hall") {
+        let scene = Scene::load(&name).expect("built-in scene");
+        let accel = Accel::build(&scene.mesh, BuildQuality::High);
+        let software = match hmdist::gpu::GpuScene::new(&accel, false) {
+            Ok(_) => false,
+            Err(_) => match hmdist::gpu::GpuScene::new(&accel, true) {
+                Ok(_) => true,
+                Err(e) => {
+                    println!("{name:<6} skipped: {e}");
+                    continue;
+                }
+            },
+        };
+        let default_side = if software { "64" } else { "1024" };
+        let side: u32 = list("HMDIST_BENCH_GPU_SIZE", default_side)[0]
+            .parse()
+            .expect("an image side");
+        let gbuffer = primary_hits(&accel, &scene, side, side);
+        let context = EstimateContext {
+            accel: &accel,
+            scene: &scene,
+            seed: 1,
+            clamp: DistanceClamp::for_diagonal(scene.diagonal(), None),
+            aovs: &[],
+            whole_image: true,
+            bvh: BuildQuality::High,
+        };
+        for rays in list("HMDIST_BENCH_GPU_RAYS", "256,4096") {
+            let rays: u32 = rays.parse().expect("a ray count");
+            let gather = Gather::new(rays, Weighting::Cosine)
+                .unwrap()
+                .with_backend(hmdist::estimators::Backend::Gpu);
+            let start = Instant::now();
+            let estimate = hmdist::render::estimate(&gather, &context, &gbuffer, &Silent).unwrap();
+            let seconds = start.elapsed().as_secs_f64();
+            let phases = estimate.phases;
+            let cast = estimate.rays.expect("gather counts its rays");
+            let details = estimate.details;
+            println!(
+                "{name:<6} {rays:>5}  {side:>5}²  {:>8.3}  {:>7.3}  {:>10.4}  {seconds:>7.2}  {:>7.2}  {:>7}  {}",
+                phases.gpu_upload.unwrap_or(f64::NAN),
+                phases.gpu_trace.unwrap_or(f64::NAN),
+                phases.gpu_readback.unwrap_or(f64::NAN),
+                details.grays_per_s.unwrap_or(f64::NAN) * 1e3,
+                cast.escaped,
+                details.device.and_then(|d| d.adapter).unwrap_or_default(),
+            );
         }
     }
 }

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use hmdist::error::Result;
+use hmdist::estimators::Backend;
 use hmdist::experiments::{select, Preset, Runner, EXPERIMENTS};
 use hmdist::shard::Shard;
 
@@ -28,6 +29,10 @@ pub struct ExperimentArgs {
     /// finds them all cached and writes the tables and the report.
     #[arg(long, value_name = "K/M", value_parser = super::render::parse_shard)]
     shard: Option<Shard>,
+    /// Where gather and the cube map run: auto takes a hardware GPU where there is one. Part
+    /// of the image cache's key.
+    #[arg(long, value_enum, default_value_t = Backend::Auto)]
+    backend: Backend,
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
@@ -46,7 +51,7 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
     let preset = args.preset;
     select(&args.name)?;
     let bar = Bar::new(args.quiet);
-    let mut runner = Runner::new(&args.scene, preset, &args.out, &bar)?;
+    let mut runner = Runner::new(&args.scene, preset, &args.out, &bar)?.with_backend(args.backend);
     if let Some(shard) = args.shard {
         runner = runner.with_shard(shard)?;
     }

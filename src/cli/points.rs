@@ -11,7 +11,7 @@ use glam::Vec3;
 use hmdist::accel::{Accel, BuildQuality, Kernel};
 use hmdist::error::{Error, Result};
 use hmdist::estimators::gather::DEFAULT_RAYS;
-use hmdist::estimators::Gather;
+use hmdist::estimators::{Backend, Gather};
 use hmdist::image::OutputSet;
 use hmdist::points::{hmd_at, PointQuery, SurfacePoint};
 use hmdist::render::DEFAULT_SEED;
@@ -40,6 +40,9 @@ pub struct PointsArgs {
     /// Direction weighting over the hemisphere.
     #[arg(long, value_enum, default_value_t = Weighting::Cosine)]
     weighting: Weighting,
+    /// Where the rays are cast: auto takes a hardware GPU where there is one.
+    #[arg(long, value_enum, default_value_t = Backend::Auto)]
+    backend: Backend,
     /// Clamp distances at D; escaping rays then count as D [default: no clamp].
     #[arg(long, value_name = "D")]
     max_distance: Option<f32>,
@@ -69,7 +72,7 @@ fn format_of(path: &Path) -> Result<Format> {
 
 pub fn run(args: PointsArgs) -> Result<()> {
     let query = PointQuery::new(
-        Gather::new(args.rays, args.weighting)?,
+        Gather::new(args.rays, args.weighting)?.with_backend(args.backend),
         args.seed,
         args.max_distance,
     )?;

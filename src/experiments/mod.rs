@@ -25,7 +25,7 @@ pub mod table;
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
-use crate::estimators::{registry, Estimator, MethodConfig};
+use crate::estimators::{registry, Backend, Estimator, MethodConfig};
 use crate::image::{exr, write_atomically, HmdImage};
 use crate::progress::{Progress, Silent};
 use crate::render::{render, RenderOptions};
@@ -230,6 +230,8 @@ pub struct Runner<'a> {
     cache: PathBuf,
     /// Set for `experiment --shard K/M`: which images this run renders.
     shard: Option<ShardRun>,
+    /// Where gather and the cube map run (every image's configuration gets it).
+    backend: Backend,
 }
 
 /// A shard's share of an experiment's images: request `i` (in the order the experiment asks,
@@ -266,7 +268,14 @@ impl<'a> Runner<'a> {
             sections: vec![],
             cache: out.join("cache"),
             shard: None,
+            backend: Backend::Auto,
         })
+    }
+
+    /// This runner with gather and the cube map on `backend` (default: auto). The backend is
+    /// part of the image cache's key: shards and the run that assembles them must agree.
+    pub fn with_backend(self, backend: Backend) -> Self {
+        Runner { backend, ..self }
     }
 
     /// This runner as shard `shard` of a run spread over machines ([`ShardRun`]): its tables
@@ -323,7 +332,11 @@ impl<'a> Runner<'a> {
         config: &MethodConfig,
         seed: u64,
     ) -> Result<(HmdImage, RenderReport)> {
-        self.image(registry::build(method, config)?.as_ref(), seed)
+        let config = MethodConfig {
+            backend: self.backend,
+            ..config.clone()
+        };
+        self.image(registry::build(method, &config)?.as_ref(), seed)
     }
 
     /// The image `estimator` renders at the preset's size with `seed`, from the cache when
@@ -332,9 +345,10 @@ impl<'a> Runner<'a> {
         let size = self.params.size;
         let parameters = serde_json::to_string(&estimator.parameters()).expect("parameters serialise");
         let key = format!(
-            "{}|{}|{parameters}|{size}x{size}|{seed}",
+            "{}|{}|{parameters}|{size}x{size}|{seed}|{:?}",
             self.scene_key,
             estimator.method(),
+            self.backend,
         );
         let stem = format!("{}-{:016x}", estimator.method(), stable_hash(key.as_bytes()));
         let (exr_path, json_path) = (

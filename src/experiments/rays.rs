@@ -6,13 +6,12 @@ use super::paper;
 use super::plot::{log_log, Series};
 use super::{Runner, Section, Table, REFERENCE_SEED};
 use crate::error::Result;
-use crate::estimators::cubemap::Backend;
 use crate::estimators::MethodConfig;
 use crate::image::picture::grey;
 use crate::image::HmdImage;
 use crate::metrics::{difference_picture, f_diff};
 
-/// One ray count of a sweep: gather and the CPU cube map, f_diff and seconds.
+/// One ray count of a sweep: gather and the cube map, f_diff and seconds.
 struct SweepRow {
     rays: u32,
     gather_f_diff: f64,
@@ -27,6 +26,8 @@ struct RaySweep {
     excluded: usize,
     reference: HmdImage,
     gathered: Vec<HmdImage>,
+    /// Where the cube maps were built, as their reports say (`cpu`, `gpu`).
+    cubemap_backend: String,
 }
 
 impl RaySweep {
@@ -39,12 +40,12 @@ impl RaySweep {
     }
 }
 
-/// The configuration of `gather` (and the cube map, CPU backend) with `rays` rays.
+/// The configuration of `gather` and the cube map with `rays` rays (on the runner's
+/// backend).
 fn rays_config(runner: &Runner, rays: u32) -> MethodConfig {
     MethodConfig {
         rays,
         cube_res: runner.params.cube_res,
-        backend: Backend::Cpu,
         ..MethodConfig::default()
     }
 }
@@ -55,15 +56,17 @@ pub(super) fn reference(runner: &Runner) -> Result<HmdImage> {
     Ok(runner.method_image("gather", &config, REFERENCE_SEED)?.0)
 }
 
-/// Renders the reference and, for each ray count, gather and the cube map (CPU backend).
+/// Renders the reference and, for each ray count, gather and the cube map.
 fn ray_sweep(runner: &Runner) -> Result<RaySweep> {
     let reference = reference(runner)?;
     let l_diag = runner.scene.diagonal();
     let (mut rows, mut gathered, mut excluded) = (vec![], vec![], 0);
+    let mut cubemap_backend = String::new();
     for &rays in &runner.params.rays {
         let config = rays_config(runner, rays);
         let (g, g_report) = runner.method_image("gather", &config, 1)?;
         let (c, c_report) = runner.method_image("cubemap", &config, 1)?;
+        cubemap_backend = backend_of(&c_report);
         let (fg, fc) = (f_diff(&reference, &g, l_diag)?, f_diff(&reference, &c, l_diag)?);
         excluded = excluded.max(fg.excluded).max(fc.excluded);
         rows.push(SweepRow {
@@ -80,19 +83,32 @@ fn ray_sweep(runner: &Runner) -> Result<RaySweep> {
         excluded,
         reference,
         gathered,
+        cubemap_backend,
     })
 }
 
+/// The backend a report says its image was made on (`?` for another shard's stand-in).
+fn backend_of(report: &crate::report::RenderReport) -> String {
+    report
+        .details
+        .device
+        .as_ref()
+        .map_or("?".into(), |d| d.backend.clone())
+}
+
 /// The label of the cube map's column: its resolution and backend, as rendered.
-fn cubemap_label(runner: &Runner) -> String {
-    format!("cubemap R = {} (cpu)", runner.params.cube_res)
+fn cubemap_label(runner: &Runner, sweep: &RaySweep) -> String {
+    format!(
+        "cubemap R = {} ({})",
+        runner.params.cube_res, sweep.cubemap_backend
+    )
 }
 
 /// Table 1: f_diff against the reference by number of gather rays, gather and cube map.
 pub fn table1(runner: &Runner) -> Result<Section> {
     let sweep = ray_sweep(runner)?;
     let p = &runner.params;
-    let cubemap = cubemap_label(runner);
+    let cubemap = cubemap_label(runner, &sweep);
     let mut ours = Table::new(
         &format!(
             "Table 1 ({}): f_diff against gather with {} rays, {}², `{}`",
@@ -191,7 +207,7 @@ fn table1_notes(sweep: &RaySweep) -> Vec<String> {
 pub fn table2(runner: &Runner) -> Result<Section> {
     let sweep = ray_sweep(runner)?;
     let p = &runner.params;
-    let cubemap = cubemap_label(runner);
+    let cubemap = cubemap_label(runner, &sweep);
     let mut ours = Table::new(
         &format!(
             "Table 2 ({}): seconds per {}² image of `{}`",
@@ -223,13 +239,14 @@ pub fn table2(runner: &Runner) -> Result<Section> {
     let (paper_first, paper_last) = (&paper::TABLE2[0], &paper::TABLE2[paper::TABLE2.len() - 1]);
     let notes = match (first, last) {
         (Some(a), Some(b)) => vec![format!(
-            "Cube-map cost hardly depends on N (paper, GPU: ×{:.2} from {} to {} rays): here, from {} to {} rays, gather's seconds grow ×{:.1} and the CPU cube map's ×{:.1} — the CPU backend fills only the texels it looks up, so it scales like gathering; the GPU backend renders whole hemicubes (see `cargo bench --bench cubemap`).",
+            "Cube-map cost hardly depends on N (paper, GPU: ×{:.2} from {} to {} rays): here, from {} to {} rays, gather's seconds grow ×{:.1} and the cube map's ({}) ×{:.1} — the CPU backend fills only the texels it looks up, so it scales like gathering; the GPU backend renders whole hemicubes (see `cargo bench --bench cubemap`).",
             paper_last.gpu_seconds / paper_first.gpu_seconds,
             paper_first.rays,
             paper_last.rays,
             a.rays,
             b.rays,
             b.gather_seconds / a.gather_seconds,
+            sweep.cubemap_backend,
             b.cubemap_seconds / a.cubemap_seconds
         )],
         _ => vec![],
@@ -291,7 +308,7 @@ pub fn fig9(runner: &Runner) -> Result<Section> {
     let s = runner.scene.display_scale;
     let mut table = Table::new(
         &format!(
-            "Fig. 9 ({}): cube map (cpu) against gather, {} rays, {}²",
+            "Fig. 9 ({}): cube map against gather, {} rays, {}²",
             runner.preset.name(),
             p.reference_rays,
             p.size
@@ -310,7 +327,7 @@ pub fn fig9(runner: &Runner) -> Result<Section> {
             cube_res: r,
             ..config.clone()
         };
-        let (c, _) = runner.method_image("cubemap", &config, 1)?;
+        let (c, c_report) = runner.method_image("cubemap", &config, 1)?;
         let d = f_diff(&g, &c, l_diag)?;
         table.push(vec![
             r.to_string(),
@@ -318,8 +335,10 @@ pub fn fig9(runner: &Runner) -> Result<Section> {
             d.compared.to_string(),
         ]);
         notes.push(format!(
-            "R = {r}: paper {} (CPU vs GPU at 65,536 rays), here {:.4}",
-            published.f_diff, d.value
+            "R = {r}: paper {} (CPU vs GPU at 65,536 rays), here {:.4} (cube map on {})",
+            published.f_diff,
+            d.value,
+            backend_of(&c_report)
         ));
         top.push(Some(Tile {
             caption: format!("cube R={r}"),

@@ -64,6 +64,7 @@ fn gather(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups)
     let leaving = bitcast<u32>(start.origin.w);
     let key = vec2(bitcast<u32>(start.t.w), bitcast<u32>(start.b.w));
     var state = states[i];
+    var stack: Stack;
     var round = p.first_ray / p.per_round;
     var sum = sums[i * p.rounds + round];
     for (var g = p.first_ray; g < p.end_ray; g++) {
@@ -75,7 +76,7 @@ fn gather(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups)
         }
         let w = hemisphere(p.weighting, stratified(g - r * p.per_round, p.grid_a, p.grid_b, random_pair(p.seed, key, g)));
         let direction = w.x * start.t.xyz + w.y * start.b.xyz + w.z * start.n.xyz;
-        let hit = closest_hit(start.origin.xyz, direction, p.t_max, leaving);
+        let hit = closest_hit(start.origin.xyz, direction, p.t_max, leaving, &stack);
         var inverse = 0.0;
         if hit.hit {
             state.dmin = min(state.dmin, hit.t);

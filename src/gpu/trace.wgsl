@@ -17,6 +17,7 @@ fn trace(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) 
         return;
     }
     let ray = trace_rays[i];
-    let hit = closest_hit(ray.origin.xyz, ray.direction.xyz, ray.origin.w, bitcast<u32>(ray.direction.w));
+    var stack: Stack;
+    let hit = closest_hit(ray.origin.xyz, ray.direction.xyz, ray.origin.w, bitcast<u32>(ray.direction.w), &stack);
     trace_distances[i] = select(bitcast<f32>(0x7f800000u), hit.t, hit.hit);
 }

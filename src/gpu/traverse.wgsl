@@ -29,6 +29,11 @@ const EMPTY: u32 = 0xffffffffu;
 const NONE: u32 = 0xffffffffu;
 // Replaced by the host with (WIDTH - 1) * depth + 1 for the BVH at hand.
 const STACK_SIZE: u32 = 64u;
+
+// The traversal stack: child references and their near distances (bit patterns). A caller
+// declares one per invocation and passes it to every closest_hit (WGSL zero-fills a function
+// variable where it is declared: once per invocation rather than once per ray).
+alias Stack = array<vec2<u32>, STACK_SIZE>;
 const UNIT_ROUNDOFF: f32 = 5.9604645e-8;
 
 @group(0) @binding(0) var<storage, read> nodes: array<vec4<f32>>;
@@ -198,11 +203,10 @@ struct Closest {
 // The first hit along origin + t direction, 0 < t <= t_max, visiting children nearest first
 // as the CPU does; hits within their own error bound are kept aside and taken only where
 // nothing else is hit (and may_take_within_error_hit allows).
-fn closest_hit(origin: vec3<f32>, direction: vec3<f32>, t_max: f32, leaving: u32) -> Closest {
+fn closest_hit(origin: vec3<f32>, direction: vec3<f32>, t_max: f32, leaving: u32, stack: ptr<function, Stack>) -> Closest {
     let r = make_ray(origin, direction);
     let far_scale = 1.0 + 2.0 * gamma(8.0);
     let negative = r.inv_direction < vec3(0.0);
-    var stack: array<vec2<u32>, STACK_SIZE>;
     var top = 0u;
     var best: Closest;
     best.hit = false;
@@ -237,18 +241,18 @@ fn closest_hit(origin: vec3<f32>, direction: vec3<f32>, t_max: f32, leaving: u32
                     if hit[k] {
                         let entry = vec2(references[half][k], bitcast<u32>(near[k]));
                         var i = top;
-                        while i > first && bitcast<f32>(stack[i - 1u].y) <= near[k] {
-                            stack[i] = stack[i - 1u];
+                        while i > first && bitcast<f32>((*stack)[i - 1u].y) <= near[k] {
+                            (*stack)[i] = (*stack)[i - 1u];
                             i--;
                         }
-                        stack[i] = entry;
+                        (*stack)[i] = entry;
                         top++;
                     }
                 }
             }
             if top > first {
                 top--;
-                current = stack[top].x;
+                current = (*stack)[top].x;
                 continue;
             }
         } else {
@@ -276,8 +280,8 @@ fn closest_hit(origin: vec3<f32>, direction: vec3<f32>, t_max: f32, leaving: u32
         var found = false;
         while top > 0u {
             top--;
-            if bitcast<f32>(stack[top].y) <= best.t * far_scale {
-                current = stack[top].x;
+            if bitcast<f32>((*stack)[top].y) <= best.t * far_scale {
+                current = (*stack)[top].x;
                 found = true;
                 break;
             }
