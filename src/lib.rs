@@ -11,7 +11,7 @@
 //! `photon1`, `photon2`, behind one interface and a registry) → [`render`] (the driver that
 //! owns the pixel loop) → [`image`] (EXR, PNG) and [`report`] (the JSON sidecar) →
 //! [`metrics`] (`f_diff`) → `experiments` (the paper's tables and figures). [`points`]
-//! gives H at points the caller chooses rather than at pixels.
+//! gives H at points the caller chooses rather than at pixels; `gpu` casts rays on a GPU.
 //!
 //! ## Conventions
 //!
@@ -51,7 +51,7 @@
 //!
 //! ## Features
 //!
-//! `cli` (clap, indicatif: the `hmdist` program), `gpu` (wgpu: the cube map's GPU backend)
+//! `cli` (clap, indicatif: the `hmdist` program), `gpu` (wgpu: gather's and the cube map's GPU backends, [`gpu`])
 //! and `experiments` (plotters: the paper's analysis) are on by default; a library user can
 //! leave them out with `default-features = false`.
 
