@@ -278,7 +278,7 @@ impl<'a> Runner<'a> {
         Runner { backend, ..self }
     }
 
-    /// This runner as shard `shard` of a run spread over machines ([`ShardRun`]): its tables
+    /// This runner as shard `shard` of a run spread over machines (see `ShardRun`): its tables
     /// and pictures go to a scratch folder, removed at the end.
     pub fn with_shard(mut self, shard: Shard) -> Result<Self> {
         let scratch = self

@@ -397,7 +397,7 @@ pub struct MapHeader {
 const MAGIC: &[u8; 8] = b"HMDPMAP1";
 
 impl PhotonMap {
-    /// The map as a file: [`MAGIC`], the header, then the tree and every column,
+    /// The map as a file: `MAGIC` (`HMDPMAP1`), the header, then the tree and every column,
     /// little-endian.
     pub fn to_bytes(&self, header: &MapHeader) -> Vec<u8> {
         let mut out = MAGIC.to_vec();
