@@ -96,17 +96,19 @@ class Scene:
         return self._inner.primary_hits(camera, tuple(size))
 
     def hmd_at(self, points, normals, rays=64, seed=1, keys=None, weighting="cosine",
-               max_distance=None, triangles=None, errors=None):
+               max_distance=None, triangles=None, errors=None, backend="auto"):
         """H at each point (float32 [n]) from `rays` gather rays around its normal; point
         i's random numbers are keyed by keys[i] (default i), as pixel i's are in an image.
         `triangles` (the triangle each point lies on) and `errors` (its floating-point error
-        bound [n, 3]), as `primary_hits` gives them, start the rays exactly as the image's."""
+        bound [n, 3]), as `primary_hits` gives them, start the rays exactly as the image's.
+        `backend` ("auto", "gpu", "cpu") says where the rays are cast, as render's does."""
         p = _vectors("points", points)
         n = _vectors("normals", normals, rows=p.shape[0])
         k = None if keys is None else _integers("keys", keys, (p.shape[0],))
         t = None if triangles is None else _integers("triangles", triangles, (p.shape[0],))
         e = None if errors is None else _vectors("errors", errors, rows=p.shape[0])
-        return self._inner.hmd_at(p, n, int(rays), int(seed), k, weighting, max_distance, t, e)
+        return self._inner.hmd_at(p, n, int(rays), int(seed), k, weighting, max_distance, t, e,
+                                  backend)
 
     def cast(self, origins, directions):
         """Distance to the first hit along each ray (float32 [n]; inf for a miss)."""

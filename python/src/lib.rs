@@ -281,9 +281,10 @@ impl PyScene {
 
     /// H at points [n, 3] with normals [n, 3] (float64), float32 [n]: point i's random
     /// numbers keyed by `keys[i]` (uint64 [n]) or by i; optionally the triangle each lies on
-    /// (uint64 [n]) and its error bound (float64 [n, 3]), as `primary_hits` gives them.
+    /// (uint64 [n]) and its error bound (float64 [n, 3]), as `primary_hits` gives them; the
+    /// rays cast on `backend` (auto, gpu, cpu), as `render`'s are.
     #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (points, normals, rays, seed, keys, weighting, max_distance, triangles = None, errors = None))]
+    #[pyo3(signature = (points, normals, rays, seed, keys, weighting, max_distance, triangles = None, errors = None, backend = "auto"))]
     fn hmd_at<'py>(
         &self,
         py: Python<'py>,
@@ -296,6 +297,7 @@ impl PyScene {
         max_distance: Option<f32>,
         triangles: Option<PyReadonlyArray1<'py, u64>>,
         errors: Option<PyReadonlyArray2<'py, f64>>,
+        backend: &str,
     ) -> PyResult<Bound<'py, PyArray1<f32>>> {
         let (p, n) = (vectors(&points)?, vectors(&normals)?);
         let triangles = match &triangles {
@@ -323,7 +325,9 @@ impl PyScene {
             Some(k) => Some(k.as_slice().map_err(|e| value_error(e.to_string()))?.to_vec()),
             None => None,
         };
-        let gather = Gather::new(rays, named("weighting", weighting)?).map_err(py_error)?;
+        let gather = Gather::new(rays, named("weighting", weighting)?)
+            .map_err(py_error)?
+            .with_backend(named("backend", backend)?);
         let query = PointQuery::new(gather, seed, max_distance).map_err(py_error)?;
         let accel = self.accel()?;
         let scene = &self.scene;
