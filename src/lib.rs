@@ -63,6 +63,7 @@ pub mod estimators;
 #[cfg(feature = "experiments")]
 pub mod experiments;
 pub mod image;
+pub mod interrupt;
 pub mod metrics;
 pub mod points;
 pub mod progress;

@@ -22,6 +22,7 @@ use super::{
 };
 use crate::accel::{Hit, RayCaster};
 use crate::error::{Error, Result};
+use crate::interrupt::POLL_RAYS;
 use crate::progress::Progress;
 use crate::report::{Details, GatherParameters, Parameters};
 use crate::sampling::{hemisphere, random_pair, strata, stratified, Frame, Weighting};
@@ -198,7 +199,7 @@ impl Estimator for Gather {
         let ao_radius = match (self.ao_radius, context.aovs.contains(&Aov::Ao)) {
             (Some(r), true) => Some(r),
             // The default radius is the median of H: a first pass finds it.
-            (None, true) if context.whole_image => Some(median_hmd(self, context, gbuffer, progress)),
+            (None, true) if context.whole_image => Some(median_hmd(self, context, gbuffer, progress)?),
             (None, true) => {
                 let message =
                     "is needed for the ao AOV of a shard: the default, the median of H, is the whole image's";
@@ -220,7 +221,12 @@ impl Estimator for Gather {
 
 /// The median of the finite H of the image, from a pass without AOVs (the `ao` AOV's default
 /// radius; +inf where no pixel has a finite H).
-fn median_hmd(gather: &Gather, context: &EstimateContext, gbuffer: &GBuffer, progress: &dyn Progress) -> f32 {
+fn median_hmd(
+    gather: &Gather,
+    context: &EstimateContext,
+    gbuffer: &GBuffer,
+    progress: &dyn Progress,
+) -> Result<f32> {
     let first = EstimateContext {
         aovs: &[],
         ..*context
@@ -230,13 +236,13 @@ fn median_hmd(gather: &Gather, context: &EstimateContext, gbuffer: &GBuffer, pro
         context: &first,
         ao_radius: None,
     };
-    let (hmd, _, _) = crate::render::pixel_pass(&pass, gbuffer, &[], progress);
+    let (hmd, _, _) = crate::render::pixel_pass(&pass, gbuffer, &[], progress)?;
     let mut finite: Vec<f32> = hmd.into_iter().filter(|h| h.is_finite()).collect();
     if finite.is_empty() {
-        return f32::INFINITY;
+        return Ok(f32::INFINITY);
     }
     let middle = finite.len() / 2;
-    *finite.select_nth_unstable_by(middle, f32::total_cmp).1
+    Ok(*finite.select_nth_unstable_by(middle, f32::total_cmp).1)
 }
 
 /// The directions of round `round` (of `n` rays) of the point keyed `key`, in its local frame:
@@ -306,7 +312,10 @@ impl PointGather {
     ) {
         let frame = start.frame;
         let mut inverse_sum = 0.0f64;
-        for w in round_directions(self.weighting, seed, key, self.rounds, n) {
+        for (j, w) in round_directions(self.weighting, seed, key, self.rounds, n).enumerate() {
+            if j as u32 % POLL_RAYS == POLL_RAYS - 1 && crate::interrupt::requested() {
+                break; // the pass ends with Error::Interrupted; this H is never seen
+            }
             let d = accel.hit_distance(start.origin, frame.to_world(w), clamp.max, start.leaving);
             self.escaped += d.is_infinite() as u32;
             self.dmin = self.dmin.min(d);

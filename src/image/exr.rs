@@ -7,7 +7,7 @@ use std::path::Path;
 use exr::prelude::*;
 
 use super::{write_atomically, HmdImage};
-use crate::error::{Error as HmdError, Result};
+use crate::error::{catch_file_panic, Error as HmdError, Result};
 use crate::estimators::AovImage;
 
 /// The channel name every hmdist EXR uses.
@@ -61,14 +61,25 @@ pub fn read(path: &Path) -> Result<HmdImage> {
 
 fn read_named(path: &Path, name: &str, only_channel_will_do: bool) -> Result<HmdImage> {
     let bytes = std::fs::read(path).map_err(|e| HmdError::io(path, "read", e))?;
-    let image = exr::prelude::read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(Cursor::new(bytes))
-        .map_err(|e| HmdError::file(path, format!("not a readable EXR image: {e}")))?;
+    decode_named(&bytes, path, name, only_channel_will_do)
+}
+
+/// [`read`] of the file at `path` whose bytes are `bytes`.
+pub fn decode(bytes: &[u8], path: &Path) -> Result<HmdImage> {
+    decode_named(bytes, path, CHANNEL, true)
+}
+
+fn decode_named(bytes: &[u8], path: &Path, name: &str, only_channel_will_do: bool) -> Result<HmdImage> {
+    let image = catch_file_panic(path, || {
+        exr::prelude::read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .first_valid_layer()
+            .all_attributes()
+            .from_buffered(Cursor::new(bytes))
+            .map_err(|e| HmdError::file(path, format!("not a readable EXR image: {e}")))
+    })?;
     let layer = &image.layer_data;
     let channels = &layer.channel_data.list;
     let channel = channels
@@ -81,6 +92,15 @@ fn read_named(path: &Path, name: &str, only_channel_will_do: bool) -> Result<Hmd
         })
         .ok_or_else(|| HmdError::file(path, format!("the EXR has no channel named {name}")))?;
     let data: Vec<f32> = channel.sample_data.values_as_f32().collect();
-    let (w, h) = (layer.size.width() as u32, layer.size.height() as u32);
-    Ok(HmdImage::new(w, h, data))
+    let (w, h) = (layer.size.width(), layer.size.height());
+    if data.len() != w * h || u32::try_from(w.max(h)).is_err() {
+        let message = format!(
+            "channel {} holds {} values for a {w}x{h} image (subsampled channels are not \
+             supported)",
+            channel.name,
+            data.len()
+        );
+        return Err(HmdError::file(path, message));
+    }
+    Ok(HmdImage::new(w as u32, h as u32, data))
 }
