@@ -64,6 +64,7 @@ pub mod estimators;
 pub mod experiments;
 pub mod image;
 pub mod interrupt;
+pub mod memory;
 pub mod metrics;
 pub mod points;
 pub mod progress;

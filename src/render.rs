@@ -107,7 +107,8 @@ pub struct Rendered {
     pub report: RenderReport,
 }
 
-/// Renders `scene` with `estimator`.
+/// Renders `scene` with `estimator`. A request whose image or BVH would not fit in the memory
+/// available is refused before anything is allocated ([`crate::memory`]).
 pub fn render(
     scene: &Scene,
     estimator: &dyn Estimator,
@@ -120,6 +121,11 @@ pub fn render(
         let message = format!("{} is not measured by {}", aov.name(), estimator.method());
         return Err(Error::invalid("aov", message));
     }
+    let pixels = options.width as u64 * options.height as u64;
+    let what = format!("{}x{}", options.width, options.height);
+    let needed = crate::memory::image_bytes(pixels, options.aovs.len());
+    crate::memory::check(Some("size"), &what, needed, None)?;
+    crate::memory::check_bvh(scene.mesh.triangle_count())?;
     in_pool(options.threads, || {
         render_in_pool(scene, estimator, options, progress)
     })?

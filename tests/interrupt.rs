@@ -8,7 +8,7 @@ use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
-use std::time::{Duration, Instant};
+use std::time::{Duration, Instant, SystemTime};
 
 use common::cli::outputs;
 use common::Scratch;
@@ -111,6 +111,79 @@ fn sigterm_during_points_exits_143_and_leaves_no_file() {
     let (code, stderr) = interrupt(start(dir.path(), &args), "TERM", Duration::from_secs(1));
     assert_eq!(code, Some(143), "{stderr}");
     assert_eq!(outputs(dir.path(), &[]), ["in.csv"]);
+}
+
+/// The files under `dir`, recursively, as paths relative to it; none if it does not exist.
+fn tree(dir: &Path) -> Vec<String> {
+    let mut names = vec![];
+    for entry in std::fs::read_dir(dir).into_iter().flatten() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        if path.is_dir() {
+            names.extend(tree(&path).into_iter().map(|n| format!("{name}/{n}")));
+        } else {
+            names.push(name);
+        }
+    }
+    names.sort();
+    names
+}
+
+#[cfg(unix)]
+#[test]
+fn an_interrupted_experiment_keeps_whole_cached_images_and_resumes_from_them() {
+    let dir = Scratch::new("sigterm-experiment");
+    let args = [
+        "experiment",
+        "table1",
+        "--scene",
+        "cube",
+        "--out",
+        "out",
+        "--quiet",
+    ];
+    let child = start(dir.path(), &args);
+    // Wait for the first cached image (the reference), then interrupt the next render.
+    let cache = dir.join("out/cache");
+    let deadline = Instant::now() + Duration::from_secs(120);
+    while !tree(&cache).iter().any(|n| n.ends_with(".json")) {
+        assert!(Instant::now() < deadline, "no image cached within 120 s");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let (code, stderr) = interrupt(child, "TERM", Duration::from_millis(300));
+    assert_eq!(code, Some(143), "{stderr}");
+    let cached = tree(&dir.join("out"));
+    assert!(cached.iter().all(|n| n.starts_with("cache/")), "{cached:?}");
+    assert!(!cached.iter().any(|n| n.contains(".tmp")), "{cached:?}");
+    for json in cached.iter().filter(|n| n.ends_with(".json")) {
+        let exr = json.replace(".json", ".exr");
+        assert!(cached.contains(&exr), "{json} without {exr}: {cached:?}");
+        let image = hmdist::image::exr::read(&dir.join("out").join(&exr)).expect("a whole EXR");
+        assert_eq!(image.width, 48);
+    }
+
+    // The rerun renders the rest and leaves the cached images as they were.
+    let stamp = SystemTime::UNIX_EPOCH + Duration::from_secs(1_000_000_000);
+    for name in &cached {
+        let file = std::fs::File::options()
+            .append(true)
+            .open(dir.join("out").join(name));
+        file.unwrap().set_modified(stamp).unwrap();
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_hmdist"))
+        .args(args)
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for name in cached.iter().filter(|n| n.ends_with(".json")) {
+        let modified = std::fs::metadata(dir.join("out").join(name))
+            .unwrap()
+            .modified()
+            .unwrap();
+        assert_eq!(modified, stamp, "{name} was rendered again");
+    }
+    assert!(dir.join("out/table1.csv").exists());
 }
 
 /// Records the progress the driver reports.
