@@ -41,6 +41,13 @@ pub fn requested() -> bool {
     shared().load(Ordering::Relaxed)
 }
 
+/// Whether a loop over rays should stop before ray `index`: every [`POLL_RAYS`] rays it looks
+/// at the flag.
+#[inline]
+pub fn stop_at_ray(index: usize) -> bool {
+    index % POLL_RAYS as usize == POLL_RAYS as usize - 1 && requested()
+}
+
 /// [`Error::Interrupted`] if the work has been asked to stop.
 #[inline]
 pub fn check() -> Result<()> {

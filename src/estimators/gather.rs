@@ -22,7 +22,6 @@ use super::{
 };
 use crate::accel::{Hit, RayCaster};
 use crate::error::{Error, Result};
-use crate::interrupt::POLL_RAYS;
 use crate::progress::Progress;
 use crate::report::{Details, GatherParameters, Parameters};
 use crate::sampling::{hemisphere, random_pair, strata, stratified, Frame, Weighting};
@@ -313,7 +312,7 @@ impl PointGather {
         let frame = start.frame;
         let mut inverse_sum = 0.0f64;
         for (j, w) in round_directions(self.weighting, seed, key, self.rounds, n).enumerate() {
-            if j as u32 % POLL_RAYS == POLL_RAYS - 1 && crate::interrupt::requested() {
+            if crate::interrupt::stop_at_ray(j) {
                 break; // the pass ends with Error::Interrupted; this H is never seen
             }
             let d = accel.hit_distance(start.origin, frame.to_world(w), clamp.max, start.leaving);
