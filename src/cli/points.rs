@@ -56,7 +56,7 @@ pub fn run(args: PointsArgs) -> Result<()> {
         args.max_distance,
     )?;
     PointFormat::of(&args.input)?;
-    let output_format = PointFormat::of(&args.output)?;
+    PointFormat::of(&args.output)?;
     let outputs = OutputSet::reserve(&[&args.output])?;
     let bar = Bar::new(args.quiet);
     bar.status("reading");
@@ -87,7 +87,7 @@ pub fn run(args: PointsArgs) -> Result<()> {
     let hmd = hmd_at(&scene, &accel, &query, &points, None)?;
     let seconds = start.elapsed().as_secs_f64();
     bar.status("");
-    let bytes = encode_values(output_format, &hmd);
+    let bytes = encode_values(&args.output, &hmd)?;
     outputs.commit(&[&bytes])?;
     if !args.quiet {
         println!(

@@ -49,23 +49,27 @@ pub fn parse_rows(path: &Path, bytes: &[u8]) -> Result<Vec<[f32; 6]>> {
     }
 }
 
-/// The bytes of the file holding `hmd`, one value per row, in `format`.
-pub fn encode_values(format: PointFormat, hmd: &[f32]) -> Vec<u8> {
-    match format {
-        PointFormat::Npy => npy_bytes(hmd),
+/// The bytes of the file `path` holding `hmd`, one value per row, in its format.
+pub fn encode_values(path: &Path, hmd: &[f32]) -> Result<Vec<u8>> {
+    Ok(match PointFormat::of(path)? {
+        PointFormat::Npy => npy_bytes(path, hmd)?,
         PointFormat::Csv => hmd
             .iter()
             .map(|h| format!("{h}\n"))
             .collect::<String>()
             .into_bytes(),
-    }
+    })
 }
 
 /// Rows of an `.npy` file of shape [n, 6], float32 or float64, in C or Fortran order.
 #[cfg(feature = "npy")]
 fn parse_npy(path: &Path, bytes: &[u8]) -> Result<Vec<[f32; 6]>> {
-    let npy =
-        npyz::NpyFile::new(bytes).map_err(|e| Error::file(path, format!("is not an .npy file: {e}")))?;
+    check_header_nesting(path, bytes)?;
+    let npy = npyz::NpyFile::new(bytes).map_err(|e| {
+        // The parser's message spans lines (the header, a caret): one line.
+        let message = e.to_string().split_whitespace().collect::<Vec<_>>().join(" ");
+        Error::file(path, format!("is not an .npy file: {message}"))
+    })?;
     let shape = npy.shape().to_vec();
     let fortran = npy.order() == npyz::Order::Fortran;
     let dtype = npy.dtype().descr();
@@ -103,17 +107,64 @@ fn parse_npy(path: &Path, bytes: &[u8]) -> Result<Vec<[f32; 6]>> {
     })
 }
 
+/// Brackets a `.npy` header may nest: numpy's own nest at most 4 deep (a structured dtype's
+/// list of tuples with a sub-array shape, inside the dictionary).
+#[cfg(feature = "npy")]
+const MAX_HEADER_NESTING: usize = 8;
+
+/// Refuses a header whose brackets nest deeper than [`MAX_HEADER_NESTING`], before npyz
+/// parses it: its parser of Python literals backtracks, doubling its time with each unclosed
+/// bracket (a 181-byte file opening 51 lists ran for more than 14 minutes under the fuzzer;
+/// 8 take a few milliseconds, 20 five seconds). A header that cannot be found is left to
+/// npyz to refuse.
+#[cfg(feature = "npy")]
+fn check_header_nesting(path: &Path, bytes: &[u8]) -> Result<()> {
+    let header = match bytes.get(6) {
+        Some(1) => bytes
+            .get(8..10)
+            .map(|n| (10, u16::from_le_bytes([n[0], n[1]]) as usize)),
+        Some(2 | 3) => bytes
+            .get(8..12)
+            .map(|n| (12, u32::from_le_bytes([n[0], n[1], n[2], n[3]]) as usize)),
+        _ => None,
+    };
+    let Some((start, length)) = header else {
+        return Ok(());
+    };
+    let text = &bytes[start.min(bytes.len())..start.saturating_add(length).min(bytes.len())];
+    let (mut depth, mut deepest) = (0usize, 0usize);
+    for b in text {
+        match b {
+            b'(' | b'[' | b'{' => depth += 1,
+            b')' | b']' | b'}' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+        deepest = deepest.max(depth);
+    }
+    if deepest > MAX_HEADER_NESTING {
+        let message =
+            format!("is not an .npy file: its header nests brackets {deepest} deep (numpy's nest at most 4)");
+        return Err(Error::file(path, message));
+    }
+    Ok(())
+}
+
 #[cfg(not(feature = "npy"))]
 fn parse_npy(path: &Path, _: &[u8]) -> Result<Vec<[f32; 6]>> {
-    Err(Error::file(
+    Err(without_npy(path))
+}
+
+#[cfg(not(feature = "npy"))]
+fn without_npy(path: &Path) -> Error {
+    Error::file(
         path,
-        "this build of hmdist reads no .npy files (feature npy)",
-    ))
+        "this build of hmdist reads and writes no .npy files (feature npy)",
+    )
 }
 
 /// H as an `.npy` file: float32, shape [n].
 #[cfg(feature = "npy")]
-fn npy_bytes(hmd: &[f32]) -> Vec<u8> {
+fn npy_bytes(_: &Path, hmd: &[f32]) -> Result<Vec<u8>> {
     use npyz::WriterBuilder;
     let mut bytes = vec![];
     let mut writer = npyz::WriteOptions::new()
@@ -124,12 +175,12 @@ fn npy_bytes(hmd: &[f32]) -> Vec<u8> {
         .expect("writing to memory");
     writer.extend(hmd.iter().copied()).expect("writing to memory");
     writer.finish().expect("writing to memory");
-    bytes
+    Ok(bytes)
 }
 
 #[cfg(not(feature = "npy"))]
-fn npy_bytes(_: &[f32]) -> Vec<u8> {
-    unreachable!("PointFormat::Npy is refused before anything is computed without feature npy")
+fn npy_bytes(path: &Path, _: &[f32]) -> Result<Vec<u8>> {
+    Err(without_npy(path))
 }
 
 /// Rows of a CSV file: six numbers per line, separated by commas (or spaces); a first line
