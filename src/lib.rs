@@ -11,7 +11,9 @@
 //! `photon1`, `photon2`, behind one interface and a registry) → [`render`] (the driver that
 //! owns the pixel loop) → [`image`] (EXR, PNG) and [`report`] (the JSON sidecar) →
 //! [`metrics`] (`f_diff`) → `experiments` (the paper's tables and figures). [`points`]
-//! gives H at points the caller chooses rather than at pixels.
+//! gives H at points the caller chooses rather than at pixels. Long work stops early when
+//! [`interrupt::request`] is called (the CLI: on Ctrl-C or SIGTERM), and requests that cannot
+//! fit in memory are refused before they allocate ([`memory`]).
 //!
 //! ## Conventions
 //!

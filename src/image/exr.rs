@@ -9,6 +9,7 @@ use exr::prelude::*;
 use super::{write_atomically, HmdImage};
 use crate::error::{catch_file_panic, Error as HmdError, Result};
 use crate::estimators::AovImage;
+use crate::render::MAX_PIXELS;
 
 /// The channel name every hmdist EXR uses.
 pub const CHANNEL: &str = "Y";
@@ -70,6 +71,7 @@ pub fn decode(bytes: &[u8], path: &Path) -> Result<HmdImage> {
 }
 
 fn decode_named(bytes: &[u8], path: &Path, name: &str, only_channel_will_do: bool) -> Result<HmdImage> {
+    check_declared_size(bytes, path)?;
     let image = catch_file_panic(path, || {
         exr::prelude::read()
             .no_deep_data()
@@ -103,4 +105,39 @@ fn decode_named(bytes: &[u8], path: &Path, name: &str, only_channel_will_do: boo
         return Err(HmdError::file(path, message));
     }
     Ok(HmdImage::new(w as u32, h as u32, data))
+}
+
+/// Refuses, from its headers alone, an EXR whose pixels could not be held: the exr crate
+/// reserves every channel's samples as the header declares them before it reads any, and a
+/// failed allocation aborts the process (found by fuzzing: a 1 KB file declaring a layer of
+/// billions of pixels). A layer may have at most [`MAX_PIXELS`] pixels, as an image hmdist
+/// renders, and its samples must fit in the memory available. Headers that cannot be read
+/// are left to the reader to refuse in its words.
+fn check_declared_size(bytes: &[u8], path: &Path) -> Result<()> {
+    let Ok(meta) = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false) else {
+        return Ok(());
+    };
+    for header in &meta.headers {
+        let (w, h) = (header.layer_size.width(), header.layer_size.height());
+        let pixels = w as u128 * h as u128;
+        if pixels > MAX_PIXELS as u128 {
+            let message = format!(
+                "declares a {w}x{h} image, more than the {MAX_PIXELS} pixels an hmdist image may have"
+            );
+            return Err(HmdError::file(path, message));
+        }
+        // Every channel as stored, and one as f32 (the channel read).
+        let per_pixel: usize = 4 + header
+            .channels
+            .list
+            .iter()
+            .map(|c| c.sample_type.bytes_per_sample())
+            .sum::<usize>();
+        let what = format!("its {w}x{h} image of {} channels", header.channels.list.len());
+        crate::memory::check(None, &what, pixels * per_pixel as u128, None).map_err(|e| match e {
+            HmdError::Scene(message) => HmdError::file(path, message),
+            other => other,
+        })?;
+    }
+    Ok(())
 }
