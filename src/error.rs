@@ -258,7 +258,13 @@ impl Drop for SilentPanics {
         wrapped.0 -= 1;
         if wrapped.0 == 0 {
             if let Some(previous) = wrapped.1.take() {
-                std::panic::set_hook(Box::new(move |info| previous(info)));
+                // Drop our wrapper, the other owner of the hook, and put the hook itself
+                // back: wrapping it again would nest one closure deeper on every call.
+                drop(std::panic::take_hook());
+                match Arc::try_unwrap(previous) {
+                    Ok(hook) => std::panic::set_hook(hook),
+                    Err(shared) => std::panic::set_hook(Box::new(move |info| shared(info))),
+                }
             }
         }
     }
@@ -294,6 +300,20 @@ mod tests {
         // Outside the guard, panics reach the hook that was in place before.
         let _ = std::panic::catch_unwind(|| panic!("outside"));
         assert_eq!(SEEN.load(Ordering::SeqCst), 1, "the hook was not restored");
+
+        // The very hook, not a wrapper of it: a million calls must not nest a million
+        // closures (the fuzzer found this one as memory growing without end).
+        let hook = std::panic::take_hook();
+        let address = &*hook as *const _ as *const ();
+        std::panic::set_hook(hook);
+        for _ in 0..3 {
+            catch_file_panic(path, || Ok(())).unwrap();
+        }
+        let hook = std::panic::take_hook();
+        assert_eq!(
+            &*hook as *const _ as *const (), address,
+            "the hook came back wrapped"
+        );
         std::panic::set_hook(previous);
     }
 }
