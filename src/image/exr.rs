@@ -107,12 +107,19 @@ fn decode_named(bytes: &[u8], path: &Path, name: &str, only_channel_will_do: boo
     Ok(HmdImage::new(w as u32, h as u32, data))
 }
 
-/// Refuses, from its headers alone, an EXR whose pixels could not be held: the exr crate
-/// reserves every channel's samples as the header declares them before it reads any, and a
-/// failed allocation aborts the process (found by fuzzing: a 1 KB file declaring a layer of
-/// billions of pixels). A layer may have at most [`MAX_PIXELS`] pixels, as an image hmdist
-/// renders, and its samples must fit in the memory available. Headers that cannot be read
-/// are left to the reader to refuse in its words.
+/// Pixel bytes an EXR may declare per byte of file: deflate (ZIP) gives at most 1032:1, RLE
+/// 64:1; a wide margin for PIZ's run-length Huffman codes.
+const MAX_COMPRESSION: u128 = 4096;
+/// Pixel bytes any file may declare, however small: 16 MB (a 2048² float image).
+const MIN_DECLARED_BYTES: u128 = 1 << 24;
+
+/// Refuses, from its headers alone, an EXR whose pixels could not be held or could not be
+/// in the file: the exr crate reserves every channel's samples as the header declares them
+/// before it reads any, and a failed allocation aborts the process (found by fuzzing: a
+/// 379-byte file declaring a layer of 77 GB). A layer may have at most [`MAX_PIXELS`]
+/// pixels, as an image hmdist renders; at most [`MAX_COMPRESSION`] bytes of samples per byte
+/// of file (or [`MIN_DECLARED_BYTES`]); and its samples must fit in the memory available.
+/// Headers that cannot be read are left to the reader to refuse in its words.
 fn check_declared_size(bytes: &[u8], path: &Path) -> Result<()> {
     let Ok(meta) = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false) else {
         return Ok(());
@@ -126,13 +133,24 @@ fn check_declared_size(bytes: &[u8], path: &Path) -> Result<()> {
             );
             return Err(HmdError::file(path, message));
         }
-        // Every channel as stored, and one as f32 (the channel read).
-        let per_pixel: usize = 4 + header
+        let stored: usize = header
             .channels
             .list
             .iter()
             .map(|c| c.sample_type.bytes_per_sample())
-            .sum::<usize>();
+            .sum();
+        let limit = (bytes.len() as u128 * MAX_COMPRESSION).max(MIN_DECLARED_BYTES);
+        if pixels * stored as u128 > limit {
+            let message = format!(
+                "declares a {w}x{h} image of {} MB in a file of {} bytes: no compression gives \
+                 that (the file is damaged or cut short)",
+                pixels * stored as u128 / 1_000_000,
+                bytes.len()
+            );
+            return Err(HmdError::file(path, message));
+        }
+        // Every channel as stored, and one as f32 (the channel read).
+        let per_pixel = 4 + stored;
         let what = format!("its {w}x{h} image of {} channels", header.channels.list.len());
         crate::memory::check(None, &what, pixels * per_pixel as u128, None).map_err(|e| match e {
             HmdError::Scene(message) => HmdError::file(path, message),
