@@ -3,11 +3,15 @@
 //! Every error here is the user's to fix or the machine's to explain: a file that cannot be
 //! read or parsed, a scene whose geometry is unusable, a parameter out of range, a GPU that is
 //! missing or fails. The CLI prints the message as one paragraph and exits with status 2.
-//! Bugs in hmdist itself are panics, not `Error`s. Match on the variant (and on
-//! [`DeviceErrorKind`]) rather than on the text.
+//! Bugs in hmdist itself are panics, not `Error`s; a panic inside a parsing crate on a
+//! malformed file is caught ([`catch_file_panic`]) and becomes an [`Error::File`]. Match on
+//! the variant (and on [`DeviceErrorKind`]) rather than on the text.
 
+use std::cell::Cell;
 use std::fmt;
+use std::panic::PanicHookInfo;
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 
 /// What went wrong, with enough context for the person who asked for it.
 #[derive(Debug)]
@@ -40,6 +44,9 @@ pub enum Error {
         /// The device's own words.
         message: String,
     },
+    /// The work was stopped by [`crate::interrupt::request`] (the CLI: Ctrl-C or SIGTERM)
+    /// before it finished; nothing was written.
+    Interrupted,
 }
 
 /// The kinds of [`Error::Device`].
@@ -166,6 +173,7 @@ impl fmt::Display for Error {
             } => write!(f, "bad parameter: {name} {message}"),
             Error::Parameter { name: None, message } => write!(f, "bad parameter: {message}"),
             Error::Device { message, .. } => write!(f, "GPU: {message}"),
+            Error::Interrupted => write!(f, "interrupted before the work was done: nothing was written"),
         }
     }
 }
@@ -178,5 +186,134 @@ impl std::error::Error for Error {
             } => Some(err),
             _ => None,
         }
+    }
+}
+
+/// Runs `parse`, code of a parsing crate that may panic on malformed input, turning a panic
+/// into an [`Error::File`] on `path` ("malformed file (the parser failed: ...)").
+///
+/// The panic's message is not printed: while a thread is inside this function the process's
+/// panic hook is wrapped by one that stays silent for that thread's panics (and passes every
+/// other thread's to the hook it wraps); the last thread to leave restores the wrapped hook,
+/// so a program using the library keeps its own. Nothing the closure touches outlives a
+/// panic, so asserting unwind safety is sound.
+pub fn catch_file_panic<T>(path: &Path, parse: impl FnOnce() -> Result<T>) -> Result<T> {
+    let _silence = SilentPanics::enter();
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(parse)).unwrap_or_else(|panic| {
+        let what = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown error".to_string());
+        let what = what.split_whitespace().collect::<Vec<_>>().join(" ");
+        Err(Error::file(
+            path,
+            format!("malformed file (the parser failed: {what})"),
+        ))
+    })
+}
+
+/// A panic hook as the standard library keeps it.
+type Hook = Arc<Box<dyn Fn(&PanicHookInfo<'_>) + Sync + Send + 'static>>;
+
+thread_local! {
+    /// Whether this thread is inside [`catch_file_panic`].
+    static SILENT: Cell<bool> = const { Cell::new(false) };
+}
+
+/// Threads inside [`catch_file_panic`] and the hook that was in place before the first one
+/// entered.
+static WRAPPED: Mutex<(usize, Option<Hook>)> = Mutex::new((0, None));
+
+/// This thread's panics are silent while it lives.
+struct SilentPanics {
+    /// Whether the thread was already silent (nested calls).
+    was_silent: bool,
+}
+
+impl SilentPanics {
+    fn enter() -> SilentPanics {
+        let mut wrapped = WRAPPED.lock().unwrap_or_else(|e| e.into_inner());
+        if wrapped.0 == 0 {
+            let previous: Hook = Arc::new(std::panic::take_hook());
+            let inner = previous.clone();
+            std::panic::set_hook(Box::new(move |info| {
+                if !SILENT.get() {
+                    inner(info)
+                }
+            }));
+            wrapped.1 = Some(previous);
+        }
+        wrapped.0 += 1;
+        SilentPanics {
+            was_silent: SILENT.replace(true),
+        }
+    }
+}
+
+impl Drop for SilentPanics {
+    fn drop(&mut self) {
+        SILENT.set(self.was_silent);
+        let mut wrapped = WRAPPED.lock().unwrap_or_else(|e| e.into_inner());
+        wrapped.0 -= 1;
+        if wrapped.0 == 0 {
+            if let Some(previous) = wrapped.1.take() {
+                // Drop our wrapper, the other owner of the hook, and put the hook itself
+                // back: wrapping it again would nest one closure deeper on every call.
+                drop(std::panic::take_hook());
+                match Arc::try_unwrap(previous) {
+                    Ok(hook) => std::panic::set_hook(hook),
+                    Err(shared) => std::panic::set_hook(Box::new(move |info| shared(info))),
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_caught_panic_is_a_file_error_and_silent_and_the_hook_is_restored() {
+        // Counts the panics of this thread that reach the process's hook.
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        static SEEN: AtomicUsize = AtomicUsize::new(0);
+        let me = std::thread::current().id();
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |_| {
+            if std::thread::current().id() == me {
+                SEEN.fetch_add(1, Ordering::SeqCst);
+            }
+        }));
+
+        let path = Path::new("broken.glb");
+        let caught = catch_file_panic(path, || -> Result<()> { panic!("index {} out of range", 7) });
+        let message = caught.expect_err("an error").to_string();
+        assert_eq!(
+            message,
+            "broken.glb: malformed file (the parser failed: index 7 out of range)"
+        );
+        assert_eq!(SEEN.load(Ordering::SeqCst), 0, "the hook saw the caught panic");
+        assert_eq!(catch_file_panic(path, || Ok(3)).unwrap(), 3);
+
+        // Outside the guard, panics reach the hook that was in place before.
+        let _ = std::panic::catch_unwind(|| panic!("outside"));
+        assert_eq!(SEEN.load(Ordering::SeqCst), 1, "the hook was not restored");
+
+        // The very hook, not a wrapper of it: a million calls must not nest a million
+        // closures (the fuzzer found this one as memory growing without end).
+        let hook = std::panic::take_hook();
+        let address = &*hook as *const _ as *const ();
+        std::panic::set_hook(hook);
+        for _ in 0..3 {
+            catch_file_panic(path, || Ok(())).unwrap();
+        }
+        let hook = std::panic::take_hook();
+        assert_eq!(
+            &*hook as *const _ as *const (), address,
+            "the hook came back wrapped"
+        );
+        std::panic::set_hook(previous);
     }
 }

@@ -12,6 +12,9 @@
 //! owns the pixel loop) → [`image`] (EXR, PNG) and [`report`] (the JSON sidecar) →
 //! [`metrics`] (`f_diff`) → `experiments` (the paper's tables and figures). [`points`]
 //! gives H at points the caller chooses rather than at pixels; `gpu` casts rays on a GPU.
+//! Long work stops early when [`interrupt::request`] is called (the CLI: on Ctrl-C or
+//! SIGTERM), and requests that cannot fit in memory are refused before they allocate
+//! ([`memory`]).
 //!
 //! ## Conventions
 //!
@@ -65,6 +68,8 @@ pub mod experiments;
 #[cfg(feature = "gpu")]
 pub mod gpu;
 pub mod image;
+pub mod interrupt;
+pub mod memory;
 pub mod metrics;
 pub mod points;
 pub mod progress;

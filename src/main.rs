@@ -9,8 +9,14 @@ use clap::Parser;
 fn main() -> ExitCode {
     let args = cli::Cli::parse();
     let runtime_dir = quiet_headless_vulkan();
+    let signals = cli::signals::Signals::catch();
     let code = match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,
+        Err(hmdist::error::Error::Interrupted) => {
+            let (status, name) = signals.interrupted_by();
+            eprintln!("hmdist: interrupted by {name}: no output was written");
+            ExitCode::from(status)
+        }
         Err(err) => {
             eprintln!("hmdist: error: {}", cli::describe(&err));
             ExitCode::from(2)

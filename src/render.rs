@@ -3,7 +3,9 @@
 //! It owns the loops over pixels: primary rays, then the estimator's pixels, rows in
 //! parallel, with progress, ray and hole counts and timings; an estimator implements one
 //! pixel ([`crate::estimators::PixelWorker`]). The output depends only on (scene, camera,
-//! method, parameters, seed): never on `threads`.
+//! method, parameters, seed): never on `threads`. Progress is counted in surface pixels, so a
+//! slow row still moves the bar; every loop stops early, with [`Error::Interrupted`], once
+//! [`crate::interrupt::request`] is called.
 
 use std::time::Instant;
 
@@ -105,7 +107,8 @@ pub struct Rendered {
     pub report: RenderReport,
 }
 
-/// Renders `scene` with `estimator`.
+/// Renders `scene` with `estimator`. A request whose image or BVH would not fit in the memory
+/// available is refused before anything is allocated ([`crate::memory`]).
 pub fn render(
     scene: &Scene,
     estimator: &dyn Estimator,
@@ -118,6 +121,11 @@ pub fn render(
         let message = format!("{} is not measured by {}", aov.name(), estimator.method());
         return Err(Error::invalid("aov", message));
     }
+    let pixels = options.width as u64 * options.height as u64;
+    let what = format!("{}x{}", options.width, options.height);
+    let needed = crate::memory::image_bytes(pixels, options.aovs.len());
+    crate::memory::check(Some("size"), &what, needed, None)?;
+    crate::memory::check_bvh(scene.mesh.triangle_count())?;
     in_pool(options.threads, || {
         render_in_pool(scene, estimator, options, progress)
     })?
@@ -138,6 +146,7 @@ fn render_in_pool(
     let start = Instant::now();
     let accel = Accel::build(&scene.mesh, bvh).with_kernel(kernel);
     let accel_build = start.elapsed().as_secs_f64();
+    crate::interrupt::check()?;
 
     let primary_start = Instant::now();
     let shard = options.shard;
@@ -152,6 +161,7 @@ fn render_in_pool(
         .map(|(_, points)| points.iter().filter(|p| p.is_none()).count())
         .sum();
     let primary = primary_start.elapsed().as_secs_f64();
+    crate::interrupt::check()?;
 
     let bounds = scene.bounds();
     let l_diag = bounds.diagonal();
@@ -242,7 +252,7 @@ pub fn estimate(
     Ok(match estimator.prepare(context, gbuffer, progress)? {
         Work::Done(estimate) => *estimate,
         Work::Pixels { work, phases, rays } => {
-            let (hmd, aovs, pass) = pixel_pass(work.as_ref(), gbuffer, context.aovs, progress);
+            let (hmd, aovs, pass) = pixel_pass(work.as_ref(), gbuffer, context.aovs, progress)?;
             let mut phases = phases;
             work.record_phase(&mut phases, pass.seconds);
             let pixel_rays = work.casts_rays().then_some(RayCount {
@@ -262,29 +272,28 @@ pub fn estimate(
 }
 
 /// The driver's loop over the estimator's pixels: rows in parallel, one worker (with its
-/// scratch) per rayon job, NaN for background, holes counted, the AOVs in `aovs` kept. The
-/// image does not depend on how rows are split among threads.
+/// scratch) per rayon job, NaN for background, holes counted, the AOVs in `aovs` kept; progress
+/// in surface pixels. The image does not depend on how rows are split among threads.
+/// [`Error::Interrupted`] if [`crate::interrupt::request`] was called before it finished.
 pub(crate) fn pixel_pass(
     work: &dyn PixelWork,
     gbuffer: &GBuffer,
     aovs: &[Aov],
     progress: &dyn Progress,
-) -> (Vec<f32>, Vec<AovImage>, PixelPass) {
+) -> Result<(Vec<f32>, Vec<AovImage>, PixelPass)> {
     let start = Instant::now();
     let width = gbuffer.width as usize;
     let mut hmd = vec![f32::NAN; gbuffer.points.len()];
     // Each pixel's AOVs, only where some are asked for.
     let mut samples = vec![AovSample::default(); if aovs.is_empty() { 0 } else { hmd.len() }];
-    progress.start(work.label(), gbuffer.height as u64);
+    progress.start(work.label(), gbuffer.surface_pixels());
     let rows = hmd.par_chunks_mut(width).zip(gbuffer.points.par_chunks(width));
     let tally = if aovs.is_empty() {
         rows.enumerate()
             .map_init(
                 || work.worker(),
                 |worker, (row, (out, points))| {
-                    let tally = pixel_row(worker.as_mut(), row * width, out, points, None);
-                    progress.advance(1);
-                    tally
+                    pixel_row(worker.as_mut(), row * width, out, points, None, progress)
                 },
             )
             .reduce(Tally::default, |a, b| a + b)
@@ -294,14 +303,14 @@ pub(crate) fn pixel_pass(
             .map_init(
                 || work.worker(),
                 |worker, (row, ((out, points), samples))| {
-                    let tally = pixel_row(worker.as_mut(), row * width, out, points, Some(samples));
-                    progress.advance(1);
-                    tally
+                    let samples = Some(samples);
+                    pixel_row(worker.as_mut(), row * width, out, points, samples, progress)
                 },
             )
             .reduce(Tally::default, |a, b| a + b)
     };
     progress.finish();
+    crate::interrupt::check()?;
     let pass = PixelPass {
         tally,
         pixels: gbuffer.surface_pixels(),
@@ -314,20 +323,25 @@ pub(crate) fn pixel_pass(
             data: samples.iter().map(|s| s.get(aov)).collect(),
         })
         .collect();
-    (hmd, channels, pass)
+    Ok((hmd, channels, pass))
 }
 
-/// One row of the pixel pass, whose first pixel has index `first`.
+/// One row of the pixel pass, whose first pixel has index `first`; it stops early once an
+/// interruption is requested.
 fn pixel_row(
     worker: &mut dyn PixelWorker,
     first: usize,
     out: &mut [f32],
     points: &[Option<crate::accel::Hit>],
     mut samples: Option<&mut [AovSample]>,
+    progress: &dyn Progress,
 ) -> Tally {
     let mut tally = Tally::default();
     let mut scratch = AovSample::default();
     for (x, (h, point)) in out.iter_mut().zip(points).enumerate() {
+        if crate::interrupt::requested() {
+            break;
+        }
         if let Some(hit) = point {
             let aov = match samples.as_deref_mut() {
                 Some(samples) => &mut samples[x],
@@ -335,6 +349,7 @@ fn pixel_row(
             };
             *h = worker.pixel(hit, (first + x) as u64, &mut tally, aov);
             tally.holes += h.is_nan() as u64;
+            progress.advance(1);
         }
     }
     tally
@@ -358,7 +373,7 @@ pub fn primary_hits_where(
         .into_par_iter()
         .map(|i| {
             let (x, y) = ((i % width as u64) as u32, (i / width as u64) as u32);
-            if !rows(y) {
+            if !rows(y) || crate::interrupt::requested() {
                 return None;
             }
             let dir = camera.pixel_direction(x, y);

@@ -131,6 +131,21 @@ fn broken_scene_files_exit_2_naming_the_file() {
     );
 }
 
+#[test]
+fn a_file_the_gltf_crate_panics_on_gives_our_one_line_error_only() {
+    // gltf 1.4.1 decodes a relative buffer URI with `urlencoding::decode(uri).unwrap()`: a
+    // panic (and its message on stderr) where the decoded bytes are not UTF-8.
+    let gltf = br#"{"asset":{"version":"2.0"},"buffers":[{"uri":"%FF.bin","byteLength":4}]}"#;
+    let stderr = refuses(
+        "gltf-panic",
+        &[("p.gltf", gltf)],
+        &render_args(&["--scene", "p.gltf"]),
+        "its URI is not percent-encoded UTF-8",
+    );
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.starts_with("hmdist: error: "), "{stderr}");
+}
+
 /// SPEC §2's ray direction for pixel (px, py), computed here in f64, independently of hmdist.
 fn spec_direction(
     eye: DVec3,

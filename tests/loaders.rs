@@ -376,9 +376,11 @@ fn bad_gltf_files_name_the_file() {
     assert_fails(&dir, garbage, "garbage.gltf:2: not valid glTF JSON");
     assert_fails(&dir, "glTF\x02\0\0\0?", "garbage.glb: not a valid glTF file");
     let gltf = triangle_gltf(Some(&triangle_data_uri()));
-    // The gltf crate's own validation looks the accessor up with this index: a panic.
+    // The gltf crate's own validation looks the accessor up with this index (a panic): we
+    // look first.
     let index = gltf.replace(r#""POSITION": 0"#, r#""POSITION": 7"#);
-    assert_fails(&dir, index, "index.gltf: malformed file");
+    let message = "index.gltf: mesh 0 primitive 0 names accessor 7, but the file has 2 accessors";
+    assert_fails(&dir, index, message);
     let cycle = gltf.replace(r#""camera": 0,"#, r#""camera": 0, "children": [1],"#);
     assert_fails(&dir, cycle, "cycle.gltf: node 1 is reached twice");
     let odd = gltf.replace(
@@ -414,4 +416,61 @@ fn missing_files_and_unknown_formats_are_errors() {
     let message = error_of(&dir.join("nothing.obj"));
     assert!(message.contains("nothing.obj: cannot read file: "), "{message}");
     assert_fails(&dir, "v 0 0 0", "scene.xyz: unknown scene format '.xyz'");
+}
+
+/// The peak virtual memory of this process so far, in MiB (Linux: `VmPeak` of
+/// /proc/self/status), counting memory reserved but never touched, as a `Vec::with_capacity`
+/// of the declared count would be.
+#[cfg(target_os = "linux")]
+fn peak_virtual_mib() -> u64 {
+    let status = std::fs::read_to_string("/proc/self/status").unwrap();
+    let line = status.lines().find(|l| l.starts_with("VmPeak:")).unwrap();
+    let kib: u64 = line.split_whitespace().nth(1).unwrap().parse().unwrap();
+    kib / 1024
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn a_ply_declaring_50_million_triangles_without_their_data_is_refused_without_reserving_for_them() {
+    // In a child process of its own (this test's binary, run for this test only), so that
+    // its peak memory is that of the load alone.
+    const CHILD: &str = "HMDIST_TEST_PLY_CHILD";
+    let Some(format) = std::env::var_os(CHILD) else {
+        let test =
+            "a_ply_declaring_50_million_triangles_without_their_data_is_refused_without_reserving_for_them";
+        for format in ["ascii", "binary_little_endian"] {
+            let stdout = common::rerun_in_child(test, CHILD, format);
+            assert!(stdout.contains("refused in"), "{format}: {stdout}");
+        }
+        return;
+    };
+    let format = format.to_string_lossy();
+    let dir = Scratch::new(&format!("ply-50m-{format}"));
+    // 50 M vertices of 12 bytes and 50 M triangles of 13 bytes declared; 3 vertices given.
+    let mut bytes = format!(
+        "ply\nformat {format} 1.0\nelement vertex 50000000\nproperty float x\nproperty float y\n\
+         property float z\nelement face 50000000\nproperty list uchar int vertex_indices\n\
+         end_header\n"
+    )
+    .into_bytes();
+    if format == "ascii" {
+        bytes.extend(b"0 0 0\n1 0 0\n0 1 0\n");
+    } else {
+        bytes.extend(
+            [0f32, 0., 0., 1., 0., 0., 0., 1., 0.]
+                .iter()
+                .flat_map(|v| v.to_le_bytes()),
+        );
+    }
+    let path = dir.write("huge.ply", &bytes);
+    let before = peak_virtual_mib();
+    let start = std::time::Instant::now();
+    let message = error_of(&path);
+    let seconds = start.elapsed().as_secs_f64();
+    let grown = peak_virtual_mib() - before;
+    assert!(message.contains("Unexpected end of file"), "{message}");
+    assert!(seconds < 1.0, "took {seconds} s");
+    // Room for 50 M vertices alone would be 600 MB (as parsed records, 2 GB).
+    assert!(grown < 200, "peak virtual memory grew by {grown} MiB");
+    println!("refused in {seconds:.3} s, peak virtual memory +{grown} MiB: {message}");
 }

@@ -9,7 +9,7 @@ use std::sync::OnceLock;
 use glam::Vec3;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::create_exception;
-use pyo3::exceptions::{PyException, PyOSError, PyValueError};
+use pyo3::exceptions::{PyException, PyKeyboardInterrupt, PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -31,6 +31,7 @@ fn py_error(error: Error) -> PyErr {
         Error::File { .. } => PyOSError::new_err(message),
         Error::Device { .. } => DeviceError::new_err(message),
         Error::Parameter { .. } | Error::Scene(_) => PyValueError::new_err(message),
+        Error::Interrupted => PyKeyboardInterrupt::new_err(message),
     }
 }
 

@@ -1,6 +1,9 @@
 //! A progress bar with ETA on stderr; hidden with `--quiet` or when stderr is not a terminal.
+//! It redraws twice a second whether or not a step was done, so the elapsed time moves and the
+//! ETA follows the steps done so far from the first second (the render driver counts pixels).
 
 use std::io::IsTerminal;
+use std::time::Duration;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
@@ -36,6 +39,7 @@ impl Progress for Bar {
         self.0.reset();
         self.0.set_length(total);
         self.0.set_message(label.to_string());
+        self.0.enable_steady_tick(Duration::from_millis(500));
     }
 
     fn advance(&self, steps: u64) {

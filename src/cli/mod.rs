@@ -1,6 +1,7 @@
 //! Command-line interface (SPEC §7, §8): flags become the library's configuration, results
 //! become files and one summary line. Every error is the user's: printed as one paragraph
-//! with parameters spelled as flags, exit status 2 (clap's own usage errors exit 2 as well).
+//! with parameters spelled as flags, exit status 2 (clap's own usage errors exit 2 as well);
+//! an interrupted run exits with 130 (Ctrl-C) or 143 (SIGTERM) ([`signals`]).
 
 mod bar;
 mod diff;
@@ -10,6 +11,7 @@ mod photons;
 mod points;
 mod render;
 mod scene;
+pub mod signals;
 
 use clap::{Parser, Subcommand};
 

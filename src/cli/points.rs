@@ -3,7 +3,7 @@
 //! writes H per row as `.npy` (float32 [n]) or CSV, by extension. Row i is keyed by i, as
 //! pixel i is in an image.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use clap::Args;
 use glam::Vec3;
@@ -13,6 +13,7 @@ use hmdist::error::{Error, Result};
 use hmdist::estimators::gather::DEFAULT_RAYS;
 use hmdist::estimators::{Backend, Gather};
 use hmdist::image::OutputSet;
+use hmdist::points::file::{encode_values, read_rows, PointFormat};
 use hmdist::points::{hmd_at, PointQuery, SurfacePoint};
 use hmdist::render::DEFAULT_SEED;
 use hmdist::sampling::Weighting;
@@ -51,39 +52,18 @@ pub struct PointsArgs {
     quiet: bool,
 }
 
-/// The file formats, by extension.
-#[derive(Clone, Copy, PartialEq)]
-enum Format {
-    Npy,
-    Csv,
-}
-
-fn format_of(path: &Path) -> Result<Format> {
-    match path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase)
-    {
-        Some(e) if e == "npy" => Ok(Format::Npy),
-        Some(e) if e == "csv" => Ok(Format::Csv),
-        _ => Err(Error::file(path, "is neither .npy nor .csv")),
-    }
-}
-
 pub fn run(args: PointsArgs) -> Result<()> {
     let query = PointQuery::new(
         Gather::new(args.rays, args.weighting)?.with_backend(args.backend),
         args.seed,
         args.max_distance,
     )?;
-    let (input_format, output_format) = (format_of(&args.input)?, format_of(&args.output)?);
+    PointFormat::of(&args.input)?;
+    PointFormat::of(&args.output)?;
     let outputs = OutputSet::reserve(&[&args.output])?;
     let bar = Bar::new(args.quiet);
     bar.status("reading");
-    let rows = match input_format {
-        Format::Npy => read_npy(&args.input)?,
-        Format::Csv => read_csv(&args.input)?,
-    };
+    let rows = read_rows(&args.input)?;
     let points = rows
         .iter()
         .enumerate()
@@ -103,20 +83,14 @@ pub fn run(args: PointsArgs) -> Result<()> {
     bar.status("BVH");
     let rays = points.len() as u64 * args.rays as u64;
     let quality = BuildQuality::Auto.resolve(rays, scene.mesh.triangle_count());
+    hmdist::memory::check_bvh(scene.mesh.triangle_count())?;
     let accel = Accel::build(&scene.mesh, quality).with_kernel(Kernel::from_env()?);
     bar.status("gather");
     let start = std::time::Instant::now();
     let hmd = hmd_at(&scene, &accel, &query, &points, None)?;
     let seconds = start.elapsed().as_secs_f64();
     bar.status("");
-    let bytes = match output_format {
-        Format::Npy => npy_bytes(&hmd),
-        Format::Csv => hmd
-            .iter()
-            .map(|h| format!("{h}\n"))
-            .collect::<String>()
-            .into_bytes(),
-    };
+    let bytes = encode_values(&args.output, &hmd)?;
     outputs.commit(&[&bytes])?;
     if !args.quiet {
         println!(
@@ -129,83 +103,4 @@ pub fn run(args: PointsArgs) -> Result<()> {
         );
     }
     Ok(())
-}
-
-/// Rows of an `.npy` file of shape [n, 6], float32 or float64, in C or Fortran order.
-fn read_npy(path: &Path) -> Result<Vec<[f32; 6]>> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, "read", e))?;
-    let npy =
-        npyz::NpyFile::new(&bytes[..]).map_err(|e| Error::file(path, format!("is not an .npy file: {e}")))?;
-    let shape = npy.shape().to_vec();
-    let fortran = npy.order() == npyz::Order::Fortran;
-    let dtype = npy.dtype().descr();
-    let [n, 6] = shape[..] else {
-        return Err(Error::file(path, format!("has shape {shape:?}: expected [n, 6]")));
-    };
-    let bad = |e: std::io::Error| Error::file(path, format!("cannot read its values: {e}"));
-    let values: Vec<f32> = match npy.try_data::<f32>() {
-        Ok(data) => data.collect::<std::io::Result<_>>().map_err(bad)?,
-        Err(npy) => match npy.try_data::<f64>() {
-            Ok(data) => {
-                let values: Vec<f64> = data.collect::<std::io::Result<_>>().map_err(bad)?;
-                values.into_iter().map(|v| v as f32).collect()
-            }
-            Err(_) => {
-                let message = format!("holds {dtype}: expected float32 or float64");
-                return Err(Error::file(path, message));
-            }
-        },
-    };
-    rows(path, n as usize, |r, c| {
-        values[if fortran { c * n as usize + r } else { r * 6 + c }]
-    })
-}
-
-/// Rows of a CSV file: six numbers per line, separated by commas (or spaces); a first line
-/// that is not numbers (a header), blank lines and `#` comments are skipped.
-fn read_csv(path: &Path) -> Result<Vec<[f32; 6]>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, "read", e))?;
-    let mut out = vec![];
-    for (i, line) in text.lines().enumerate() {
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') {
-            continue;
-        }
-        let fields: Vec<&str> = line.split([',', ' ', '\t']).filter(|f| !f.is_empty()).collect();
-        let numbers: Vec<f32> = fields.iter().filter_map(|f| f.trim().parse().ok()).collect();
-        if numbers.len() != fields.len() && i == 0 {
-            continue; // a header
-        }
-        if numbers.len() != 6 || fields.len() != 6 {
-            let message = format!("expected 6 numbers (x y z nx ny nz), found '{line}'");
-            return Err(Error::file_line(path, i + 1, message));
-        }
-        out.push([
-            numbers[0], numbers[1], numbers[2], numbers[3], numbers[4], numbers[5],
-        ]);
-    }
-    rows(path, out.len(), |r, c| out[r][c])
-}
-
-/// `n` rows from `value(row, column)`; none is refused.
-fn rows(path: &Path, n: usize, value: impl Fn(usize, usize) -> f32) -> Result<Vec<[f32; 6]>> {
-    if n == 0 {
-        return Err(Error::file(path, "holds no points"));
-    }
-    Ok((0..n).map(|r| std::array::from_fn(|c| value(r, c))).collect())
-}
-
-/// H as an `.npy` file: float32, shape [n].
-fn npy_bytes(hmd: &[f32]) -> Vec<u8> {
-    use npyz::WriterBuilder;
-    let mut bytes = vec![];
-    let mut writer = npyz::WriteOptions::new()
-        .default_dtype()
-        .shape(&[hmd.len() as u64])
-        .writer(&mut bytes)
-        .begin_nd()
-        .expect("writing to memory");
-    writer.extend(hmd.iter().copied()).expect("writing to memory");
-    writer.finish().expect("writing to memory");
-    bytes
 }

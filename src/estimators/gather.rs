@@ -280,7 +280,7 @@ impl Estimator for Gather {
         let ao_radius = match ao {
             AoRadius::Given(r) => Some(r),
             // The default radius is the median of H: a first pass finds it.
-            AoRadius::Median => Some(median_hmd(self, context, gbuffer, progress)),
+            AoRadius::Median => Some(median_hmd(self, context, gbuffer, progress)?),
             AoRadius::None => None,
         };
         Ok(Work::Pixels {
@@ -333,7 +333,12 @@ pub(crate) fn median_finite(hmd: impl IntoIterator<Item = f32>) -> f32 {
 
 /// The median of the finite H of the image, from a pass without AOVs (the `ao` AOV's default
 /// radius; +inf where no pixel has a finite H).
-fn median_hmd(gather: &Gather, context: &EstimateContext, gbuffer: &GBuffer, progress: &dyn Progress) -> f32 {
+fn median_hmd(
+    gather: &Gather,
+    context: &EstimateContext,
+    gbuffer: &GBuffer,
+    progress: &dyn Progress,
+) -> Result<f32> {
     let first = EstimateContext {
         aovs: &[],
         ..*context
@@ -343,8 +348,8 @@ fn median_hmd(gather: &Gather, context: &EstimateContext, gbuffer: &GBuffer, pro
         context: &first,
         ao_radius: None,
     };
-    let (hmd, _, _) = crate::render::pixel_pass(&pass, gbuffer, &[], progress);
-    median_finite(hmd)
+    let (hmd, _, _) = crate::render::pixel_pass(&pass, gbuffer, &[], progress)?;
+    Ok(median_finite(hmd))
 }
 
 /// The directions of round `round` (of `n` rays) of the point keyed `key`, in its local frame:
@@ -414,7 +419,10 @@ impl PointGather {
     ) {
         let frame = start.frame;
         let mut inverse_sum = 0.0f64;
-        for w in round_directions(self.weighting, seed, key, self.rounds, n) {
+        for (j, w) in round_directions(self.weighting, seed, key, self.rounds, n).enumerate() {
+            if crate::interrupt::stop_at_ray(j) {
+                break; // the pass ends with Error::Interrupted; this H is never seen
+            }
             let d = accel.hit_distance(start.origin, frame.to_world(w), clamp.max, start.leaving);
             self.escaped += d.is_infinite() as u32;
             self.dmin = self.dmin.min(d);

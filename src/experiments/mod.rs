@@ -342,6 +342,7 @@ impl<'a> Runner<'a> {
     /// The image `estimator` renders at the preset's size with `seed`, from the cache when
     /// an earlier run made it.
     pub fn image(&self, estimator: &dyn Estimator, seed: u64) -> Result<(HmdImage, RenderReport)> {
+        crate::interrupt::check()?;
         let size = self.params.size;
         let parameters = serde_json::to_string(&estimator.parameters()).expect("parameters serialise");
         let key = format!(

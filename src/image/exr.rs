@@ -7,8 +7,9 @@ use std::path::Path;
 use exr::prelude::*;
 
 use super::{write_atomically, HmdImage};
-use crate::error::{Error as HmdError, Result};
+use crate::error::{catch_file_panic, Error as HmdError, Result};
 use crate::estimators::AovImage;
+use crate::render::MAX_PIXELS;
 
 /// The channel name every hmdist EXR uses.
 pub const CHANNEL: &str = "Y";
@@ -61,14 +62,26 @@ pub fn read(path: &Path) -> Result<HmdImage> {
 
 fn read_named(path: &Path, name: &str, only_channel_will_do: bool) -> Result<HmdImage> {
     let bytes = std::fs::read(path).map_err(|e| HmdError::io(path, "read", e))?;
-    let image = exr::prelude::read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(Cursor::new(bytes))
-        .map_err(|e| HmdError::file(path, format!("not a readable EXR image: {e}")))?;
+    decode_named(&bytes, path, name, only_channel_will_do)
+}
+
+/// [`read`] of the file at `path` whose bytes are `bytes`.
+pub fn decode(bytes: &[u8], path: &Path) -> Result<HmdImage> {
+    decode_named(bytes, path, CHANNEL, true)
+}
+
+fn decode_named(bytes: &[u8], path: &Path, name: &str, only_channel_will_do: bool) -> Result<HmdImage> {
+    check_declared_size(bytes, path)?;
+    let image = catch_file_panic(path, || {
+        exr::prelude::read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .first_valid_layer()
+            .all_attributes()
+            .from_buffered(Cursor::new(bytes))
+            .map_err(|e| HmdError::file(path, format!("not a readable EXR image: {e}")))
+    })?;
     let layer = &image.layer_data;
     let channels = &layer.channel_data.list;
     let channel = channels
@@ -81,6 +94,68 @@ fn read_named(path: &Path, name: &str, only_channel_will_do: bool) -> Result<Hmd
         })
         .ok_or_else(|| HmdError::file(path, format!("the EXR has no channel named {name}")))?;
     let data: Vec<f32> = channel.sample_data.values_as_f32().collect();
-    let (w, h) = (layer.size.width() as u32, layer.size.height() as u32);
-    Ok(HmdImage::new(w, h, data))
+    let (w, h) = (layer.size.width(), layer.size.height());
+    if data.len() != w * h || u32::try_from(w.max(h)).is_err() {
+        let message = format!(
+            "channel {} holds {} values for a {w}x{h} image (subsampled channels are not \
+             supported)",
+            channel.name,
+            data.len()
+        );
+        return Err(HmdError::file(path, message));
+    }
+    Ok(HmdImage::new(w as u32, h as u32, data))
+}
+
+/// Pixel bytes an EXR may declare per byte of file: deflate (ZIP) gives at most 1032:1, RLE
+/// 64:1; a wide margin for PIZ's run-length Huffman codes.
+const MAX_COMPRESSION: u128 = 4096;
+/// Pixel bytes any file may declare, however small: 16 MB (a 2048² float image).
+const MIN_DECLARED_BYTES: u128 = 1 << 24;
+
+/// Refuses, from its headers alone, an EXR whose pixels could not be held or could not be
+/// in the file: the exr crate reserves every channel's samples as the header declares them
+/// before it reads any, and a failed allocation aborts the process (found by fuzzing: a
+/// 379-byte file declaring a layer of 77 GB). A layer may have at most [`MAX_PIXELS`]
+/// pixels, as an image hmdist renders; at most [`MAX_COMPRESSION`] bytes of samples per byte
+/// of file (or [`MIN_DECLARED_BYTES`]); and its samples must fit in the memory available.
+/// Headers that cannot be read are left to the reader to refuse in its words.
+fn check_declared_size(bytes: &[u8], path: &Path) -> Result<()> {
+    let Ok(meta) = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false) else {
+        return Ok(());
+    };
+    for header in &meta.headers {
+        let (w, h) = (header.layer_size.width(), header.layer_size.height());
+        let pixels = w as u128 * h as u128;
+        if pixels > MAX_PIXELS as u128 {
+            let message = format!(
+                "declares a {w}x{h} image, more than the {MAX_PIXELS} pixels an hmdist image may have"
+            );
+            return Err(HmdError::file(path, message));
+        }
+        let stored: usize = header
+            .channels
+            .list
+            .iter()
+            .map(|c| c.sample_type.bytes_per_sample())
+            .sum();
+        let limit = (bytes.len() as u128 * MAX_COMPRESSION).max(MIN_DECLARED_BYTES);
+        if pixels * stored as u128 > limit {
+            let message = format!(
+                "declares a {w}x{h} image of {} MB in a file of {} bytes: no compression gives \
+                 that (the file is damaged or cut short)",
+                pixels * stored as u128 / 1_000_000,
+                bytes.len()
+            );
+            return Err(HmdError::file(path, message));
+        }
+        // Every channel as stored, and one as f32 (the channel read).
+        let per_pixel = 4 + stored;
+        let what = format!("its {w}x{h} image of {} channels", header.channels.list.len());
+        crate::memory::check(None, &what, pixels * per_pixel as u128, None).map_err(|e| match e {
+            HmdError::Scene(message) => HmdError::file(path, message),
+            other => other,
+        })?;
+    }
+    Ok(())
 }

@@ -4,7 +4,8 @@
 //! pixels and holes, `+inf` pixels where every sample escaped. Every file is written to a
 //! temporary name beside its destination and renamed into place: a failed or interrupted write
 //! never leaves a half-written output. Files that belong together (a render's EXR, PNG and
-//! JSON) go through an [`OutputSet`]: all of them are written, or none.
+//! JSON) go through an [`OutputSet`]: all of them are written, or none. Once an interruption is
+//! requested ([`crate::interrupt`]) nothing more is renamed into place.
 
 pub mod exr;
 pub mod picture;
@@ -55,15 +56,18 @@ fn temporary(path: &Path) -> Result<PathBuf> {
     Ok(dir.join(format!(".{}.{}.tmp", name.to_string_lossy(), std::process::id())))
 }
 
-/// Writes `bytes` to `path` through a temporary file in the same folder and a rename.
+/// Writes `bytes` to `path` through a temporary file in the same folder and a rename; if an
+/// interruption was requested meanwhile ([`crate::interrupt`]), removes the temporary and
+/// returns [`Error::Interrupted`] instead of renaming.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     let temp = temporary(path)?;
     let written = std::fs::File::create(&temp)
         .and_then(|mut f| f.write_all(bytes).and_then(|_| f.sync_all()))
-        .and_then(|_| std::fs::rename(&temp, path));
-    written.map_err(|e| {
+        .map_err(|e| Error::io(path, "write", e))
+        .and_then(|_| crate::interrupt::check())
+        .and_then(|_| std::fs::rename(&temp, path).map_err(|e| Error::io(path, "write", e)));
+    written.inspect_err(|_| {
         let _ = std::fs::remove_file(&temp);
-        Error::io(path, "write", e)
     })
 }
 
@@ -117,13 +121,15 @@ impl OutputSet {
     }
 }
 
-/// Fills every temporary, then renames every one into place.
+/// Fills every temporary, then (unless an interruption was requested meanwhile) renames
+/// every one into place.
 fn write_all(files: &[(PathBuf, PathBuf)], contents: &[&[u8]]) -> Result<()> {
     for ((path, temp), bytes) in files.iter().zip(contents) {
         std::fs::File::create(temp)
             .and_then(|mut f| f.write_all(bytes).and_then(|_| f.sync_all()))
             .map_err(|e| Error::io(path, "write", e))?;
     }
+    crate::interrupt::check()?;
     for (path, temp) in files {
         std::fs::rename(temp, path).map_err(|e| Error::io(path, "write", e))?;
     }

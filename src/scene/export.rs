@@ -16,7 +16,8 @@ use std::path::{Path, PathBuf};
 use crate::error::{Error, Result};
 use crate::scene::Mesh;
 
-/// Writes `mesh` to `path` as OBJ, replacing any file there only once the whole mesh is written.
+/// Writes `mesh` to `path` as OBJ, replacing any file there only once the whole mesh is written
+/// (and not at all once an interruption is requested, [`crate::interrupt`]).
 pub fn write_obj(mesh: &Mesh, path: &Path) -> Result<()> {
     let temporary = temporary_path(path);
     let written = File::create(&temporary).and_then(|file| {
@@ -24,12 +25,13 @@ pub fn write_obj(mesh: &Mesh, path: &Path) -> Result<()> {
         write_obj_to(mesh, &mut out)?;
         out.into_inner().map_err(|e| e.into_error())?.sync_all()
     });
-    let result = written.and_then(|()| std::fs::rename(&temporary, path));
-    if let Err(err) = result {
+    let result = written
+        .map_err(|e| Error::io(path, "write", e))
+        .and_then(|()| crate::interrupt::check())
+        .and_then(|()| std::fs::rename(&temporary, path).map_err(|e| Error::io(path, "write", e)));
+    result.inspect_err(|_| {
         let _ = std::fs::remove_file(&temporary);
-        return Err(Error::io(path, "write", err));
-    }
-    Ok(())
+    })
 }
 
 /// Writes `mesh` as OBJ text to `out`.

@@ -41,6 +41,22 @@ pub fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
+/// Runs the test `test` of this test binary again, alone, in a child process with `var` set to
+/// `value` (for a test that needs a process of its own: its peak memory, a process-wide
+/// flag); asserts that it passes and returns its stdout. The child sees `var` and does the
+/// work.
+pub fn rerun_in_child(test: &str, var: &str, value: &str) -> String {
+    let out = std::process::Command::new(std::env::current_exe().unwrap())
+        .args([test, "--exact", "--nocapture", "--test-threads=1"])
+        .env(var, value)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{var}={value}: {stdout}{stderr}");
+    stdout
+}
+
 /// A fresh, empty folder for one test under the system temp dir. Removed when the test
 /// passes; kept (and named on stderr) when it fails, to look at.
 pub struct Scratch(pub PathBuf);

@@ -77,7 +77,10 @@ impl PixelWorker for TexelCache<'_> {
         let origin = hit.spawn_origin(hit.normal);
         let frame = Frame::from_normal(hit.normal);
         let mut mean = HarmonicMean::default();
-        for w in cubemap.gather.directions(context.seed, pixel) {
+        for (j, w) in cubemap.gather.directions(context.seed, pixel).enumerate() {
+            if crate::interrupt::stop_at_ray(j) {
+                break; // the pass ends with Error::Interrupted; this H is never seen
+            }
             let (_, texel, along) = hemicube.lookup(w);
             if self.stamp[texel] != self.current {
                 let (face, c) = hemicube.texel_direction(texel);

@@ -187,6 +187,7 @@ impl PhotonEstimator {
             let bvh = options
                 .bvh_quality
                 .resolve(pixels + self.expected_rays(pixels), scene.mesh.triangle_count());
+            crate::memory::check_bvh(scene.mesh.triangle_count())?;
             let accel = Accel::build(&scene.mesh, bvh).with_kernel(crate::accel::Kernel::from_env()?);
             let source = self.source_for(scene, (options.width, options.height))?;
             let (map, header, _) = self.trace_and_index(&accel, &source, options.seed, progress)?;
@@ -256,29 +257,12 @@ impl PhotonEstimator {
 
 /// Refuses a photon budget whose map would not fit in the memory available now.
 fn check_memory(method: PhotonMethod, photons: usize) -> Result<()> {
-    let needed = method.peak_build_bytes(photons);
-    if let Some(available) = available_memory() {
-        if needed > available {
-            let message = format!(
-                "of {photons} needs about {:.1} GB to build the {} map ({} B per photon while \
-                 building), but only {:.1} GB of memory is available",
-                needed as f64 / 1e9,
-                method.name(),
-                method.peak_build_bytes(1),
-                available as f64 / 1e9
-            );
-            return Err(Error::invalid("photons", message));
-        }
-    }
-    Ok(())
-}
-
-/// `MemAvailable` of /proc/meminfo, where there is one.
-fn available_memory() -> Option<u128> {
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: u128 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
+    let what = format!(
+        "of {photons} (the {} map takes {} B per photon while building)",
+        method.name(),
+        method.peak_build_bytes(1)
+    );
+    crate::memory::check(Some("photons"), &what, method.peak_build_bytes(photons), None)
 }
 
 impl Estimator for PhotonEstimator {

@@ -90,6 +90,7 @@ pub fn trace_photons<R: RayCaster>(
     let mut photons: Vec<TracedPhoton> = Vec::with_capacity(budget);
     let (mut paths_traced, mut missed_emissions) = (0u64, 0u64);
     while photons.len() < budget {
+        crate::interrupt::check()?;
         let batch: Vec<Option<Vec<TracedPhoton>>> = (paths_traced..paths_traced + BATCH)
             .into_par_iter()
             .map(|path| trace_path(accel, source, rules, seed, path))

@@ -20,16 +20,24 @@ use ::gltf::mesh::Mode;
 use ::gltf::{accessor::DataType, accessor::Dimensions, buffer, camera::Projection};
 use glam::{Affine3A, Mat4, Vec3};
 
-use super::{guarded, read_bytes, MeshFile};
-use crate::error::{Error, Result};
+use super::MeshFile;
+use crate::error::{catch_file_panic, Error, Result};
 use crate::scene::{Camera, Mesh, SpotLight};
 
-pub(super) fn load(path: &Path) -> Result<MeshFile> {
-    let bytes = read_bytes(path)?;
-    // The gltf crate panics on some malformed files, in validation itself (an index into an
-    // empty accessor list) and after it (URI decoding, accessor arithmetic with a zero count).
-    guarded(path, || {
-        let gltf = ::gltf::Gltf::from_slice(&bytes).map_err(|e| parse_error(path, &bytes, e))?;
+pub(super) fn load(path: &Path, bytes: &[u8]) -> Result<MeshFile> {
+    // The gltf crate panics on some malformed files, in validation itself (a POSITION naming
+    // an accessor that does not exist: checked first, below) and after it (URI decoding,
+    // accessor arithmetic with a zero count): the guard turns any other into an error.
+    catch_file_panic(path, || {
+        let unchecked =
+            ::gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| parse_error(path, bytes, e))?;
+        check_mesh_accessors(unchecked.document.as_json()).map_err(|m| Error::file(path, m))?;
+        let document = ::gltf::Document::from_json(unchecked.document.into_json())
+            .map_err(|e| parse_error(path, bytes, e))?;
+        let gltf = ::gltf::Gltf {
+            document,
+            blob: unchecked.blob,
+        };
         let buffers = read_buffers(path, &gltf)?;
         walk(&gltf.document, &buffers).map_err(|message| Error::file(path, message))
     })
@@ -44,6 +52,24 @@ fn parse_error(path: &Path, bytes: &[u8], err: ::gltf::Error) -> Error {
     }
 }
 
+/// Refuses a primitive whose attributes or indices name an accessor the file does not have,
+/// before the gltf crate's validation looks the POSITION accessor up unchecked (a panic).
+fn check_mesh_accessors(root: &::gltf::json::Root) -> std::result::Result<(), String> {
+    let count = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let named = primitive.attributes.values().chain(&primitive.indices);
+            if let Some(index) = named.map(|i| i.value()).find(|&i| i >= count) {
+                return Err(format!(
+                    "mesh {m} primitive {p} names accessor {index}, but the file has {count} \
+                     accessors"
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Every buffer's bytes: the GLB chunk, a data URI, or a file beside the glTF file.
 fn read_buffers(path: &Path, gltf: &::gltf::Gltf) -> Result<Vec<buffer::Data>> {
     let base = path.parent().unwrap_or(Path::new("."));
@@ -51,11 +77,17 @@ fn read_buffers(path: &Path, gltf: &::gltf::Gltf) -> Result<Vec<buffer::Data>> {
     let mut buffers = Vec::new();
     for buffer in gltf.buffers() {
         let what = match buffer.source() {
+            buffer::Source::Uri(uri) if uri.starts_with("file:") => {
+                format!("buffer {} ('{uri}')", buffer.index())
+            }
             buffer::Source::Uri(uri) if !uri.starts_with("data:") => {
                 format!("buffer {} ('{}')", buffer.index(), base.join(uri).display())
             }
             _ => format!("buffer {}", buffer.index()),
         };
+        if let buffer::Source::Uri(uri) = buffer.source() {
+            check_external_buffer(base, uri).map_err(|m| Error::file(path, format!("{what}: {m}")))?;
+        }
         let data = buffer::Data::from_source_and_blob(buffer.source(), Some(base), &mut blob);
         let data = data.map_err(|e| Error::file(path, format!("cannot read {what}: {e}")))?;
         if data.len() < buffer.length() {
@@ -69,6 +101,44 @@ fn read_buffers(path: &Path, gltf: &::gltf::Gltf) -> Result<Vec<buffer::Data>> {
         buffers.push(data);
     }
     Ok(buffers)
+}
+
+/// Refuses, before the gltf crate reads it, a buffer URI it would mishandle: a relative path
+/// whose percent-decoding is not UTF-8 (decoded there with a panic), or one naming something
+/// other than a regular file (`/dev/zero` would be read until memory runs out). Data URIs
+/// and other schemes are the crate's to check.
+fn check_external_buffer(base: &Path, uri: &str) -> std::result::Result<(), String> {
+    let file = match uri.strip_prefix("file://").or(uri.strip_prefix("file:")) {
+        Some(file) => Path::new(file).to_path_buf(),
+        None if uri.contains(':') => return Ok(()),
+        None => base.join(percent_decoded(uri).ok_or("its URI is not percent-encoded UTF-8")?),
+    };
+    match std::fs::metadata(&file) {
+        Ok(metadata) if !metadata.is_file() => Err("it names something other than a file".into()),
+        _ => Ok(()), // a missing file is the crate's error, with the OS's words
+    }
+}
+
+/// `text` with each `%XX` replaced by the byte it stands for, if the result is UTF-8.
+fn percent_decoded(text: &str) -> Option<String> {
+    let bytes = text.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    let digit = |b: u8| (b as char).to_digit(16);
+    while i < bytes.len() {
+        let escape = bytes.get(i + 1..i + 3).filter(|_| bytes[i] == b'%');
+        match escape.and_then(|h| Some((digit(h[0])?, digit(h[1])?))) {
+            Some((high, low)) => {
+                out.push((high * 16 + low) as u8);
+                i += 3;
+            }
+            None => {
+                out.push(bytes[i]);
+                i += 1;
+            }
+        }
+    }
+    String::from_utf8(out).ok()
 }
 
 /// Walks the scene's node trees depth first, parents before children, in file order.

@@ -8,7 +8,10 @@
 //!
 //! Every error is an [`Error::File`] naming the file, and the line where the format has
 //! lines. Loaders never panic on bad input: where a parsing crate can panic on malformed
-//! data, the call is guarded and the panic turned into an error.
+//! data, the call is guarded and the panic turned into an error, silently
+//! ([`crate::error::catch_file_panic`]). [`load_bytes`] and [`load_mesh_bytes`] take the file's
+//! bytes, already read (the fuzz targets in `fuzz/` call them); the path then gives the
+//! format, the name in errors and the folder of the files the file refers to.
 
 mod gltf;
 mod obj;
@@ -67,10 +70,16 @@ fn format_of(path: &Path) -> Result<Format> {
 /// Loads a scene file: a mesh file (with a framing camera unless it carries one) or a TOML
 /// scene description. The result passes [`Scene::validate`].
 pub fn load_file(path: &Path) -> Result<Scene> {
+    format_of(path)?;
+    load_bytes(path, &read_bytes(path)?)
+}
+
+/// [`load_file`] of the file at `path` whose bytes are `bytes`.
+pub fn load_bytes(path: &Path, bytes: &[u8]) -> Result<Scene> {
     let scene = match format_of(path)? {
-        Format::SceneToml => toml::load_scene(path)?,
+        Format::SceneToml => toml::load_scene(path, bytes)?,
         _ => {
-            let file = load_mesh(path)?;
+            let file = load_mesh_bytes(path, bytes)?;
             let bounds = file.mesh.bounds();
             Scene {
                 name: file_name(path),
@@ -88,10 +97,16 @@ pub fn load_file(path: &Path) -> Result<Scene> {
 /// Loads a mesh file (OBJ, PLY, glTF/GLB). The mesh is checked: it has triangles, every
 /// index is in range and every used vertex is finite.
 pub fn load_mesh(path: &Path) -> Result<MeshFile> {
+    format_of(path)?;
+    load_mesh_bytes(path, &read_bytes(path)?)
+}
+
+/// [`load_mesh`] of the file at `path` whose bytes are `bytes`.
+pub fn load_mesh_bytes(path: &Path, bytes: &[u8]) -> Result<MeshFile> {
     let file = match format_of(path)? {
-        Format::Obj => obj::load(path)?,
-        Format::Ply => ply::load(path)?,
-        Format::Gltf => gltf::load(path)?,
+        Format::Obj => obj::load(path, bytes)?,
+        Format::Ply => ply::load(path, bytes)?,
+        Format::Gltf => gltf::load(path, bytes)?,
         Format::SceneToml => {
             return Err(Error::file(
                 path,
@@ -129,22 +144,4 @@ fn line_of_offset(text: &[u8], offset: usize) -> usize {
         .iter()
         .filter(|&&b| b == b'\n')
         .count()
-}
-
-/// Runs code of a parsing crate that can panic on malformed input, turning a panic into an
-/// error on `path`. (The panic hook still prints the panic's message first: a library must
-/// not replace the process-wide hook.) Nothing the closure touches outlives a panic, so
-/// asserting unwind safety is sound.
-fn guarded<T>(path: &Path, parse: impl FnOnce() -> Result<T>) -> Result<T> {
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(parse)).unwrap_or_else(|panic| {
-        let what = panic
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| panic.downcast_ref::<String>().cloned())
-            .unwrap_or_else(|| "unknown error".to_string());
-        Err(Error::file(
-            path,
-            format!("malformed file (the parser failed: {what})"),
-        ))
-    })
 }

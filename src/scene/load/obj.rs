@@ -21,8 +21,8 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use super::{line_of_offset, read_bytes, MeshFile};
-use crate::error::{Error, Result};
+use super::{line_of_offset, MeshFile};
+use crate::error::{catch_file_panic, Error, Result};
 use crate::scene::Mesh;
 
 /// The statements of the OBJ specification; any other first word on a line is an error.
@@ -37,8 +37,8 @@ const STATEMENTS: [&str; 37] = [
 /// Statements tobj would act on that play no part in H: hidden from it.
 const HIDDEN: [&str; 5] = ["vt", "vn", "l", "usemtl", "mtllib"];
 
-pub(super) fn load(path: &Path) -> Result<MeshFile> {
-    let mut text = read_bytes(path)?;
+pub(super) fn load(path: &Path, bytes: &[u8]) -> Result<MeshFile> {
+    let mut text = bytes.to_vec();
     prepare(&mut text).map_err(|(line, message)| Error::file_line(path, line, message))?;
 
     let options = tobj::LoadOptions {
@@ -49,7 +49,12 @@ pub(super) fn load(path: &Path) -> Result<MeshFile> {
     };
     let mut reader = Cursor::new(&text[..]);
     let no_materials = |_: &Path| Ok((Vec::new(), Default::default()));
-    let models = match tobj::load_obj_buf(&mut reader, &options, no_materials) {
+    // tobj 4.0.5 panicked on huge face indices (an overflow); `prepare` guards against that
+    // case, and the catch against any other.
+    let loaded = catch_file_panic(path, || {
+        Ok(tobj::load_obj_buf(&mut reader, &options, no_materials))
+    })?;
+    let models = match loaded {
         Ok((models, _materials)) => models,
         Err(err) => {
             let end = reader.position() as usize;

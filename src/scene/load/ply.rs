@@ -17,8 +17,8 @@ use glam::Vec3;
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{Encoding, Header, Payload, Property, PropertyAccess, PropertyAccessResult};
 
-use super::{guarded, line_of_offset, read_bytes, MeshFile};
-use crate::error::{Error, Result};
+use super::{line_of_offset, MeshFile};
+use crate::error::{catch_file_panic, Error, Result};
 use crate::scene::Mesh;
 
 /// The names a face's corner list goes by.
@@ -80,13 +80,12 @@ struct Parsed {
     first_data_line: usize,
 }
 
-pub(super) fn load(path: &Path) -> Result<MeshFile> {
-    let bytes = read_bytes(path)?;
+pub(super) fn load(path: &Path, bytes: &[u8]) -> Result<MeshFile> {
     // ply-rs-bw returned errors for every malformed input we tried (truncations at every
     // byte, thousands of random byte changes); the guard is there because a panic inside a
     // parsing crate must not take the program down.
-    let parsed = guarded(path, || {
-        parse(&bytes).map_err(|(line, message)| match line {
+    let parsed = catch_file_panic(path, || {
+        parse(bytes).map_err(|(line, message)| match line {
             Some(line) => Error::file_line(path, line, message),
             None => Error::file(path, message),
         })

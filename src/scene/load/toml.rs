@@ -29,7 +29,7 @@ use ::toml::Spanned;
 use glam::{Affine3A, Quat, Vec3};
 use serde::Deserialize;
 
-use super::{file_name, line_of_offset, load_mesh, read_bytes};
+use super::{file_name, line_of_offset, load_mesh};
 use crate::error::{Error, Result};
 use crate::scene::{default_display_scale, framing_camera, Camera, Mesh, Scene, SpotLight};
 
@@ -75,20 +75,20 @@ struct DisplayEntry {
     scale: f32,
 }
 
-/// Loads the scene described by the TOML file at `path`, with its meshes.
-pub(super) fn load_scene(path: &Path) -> Result<Scene> {
-    let bytes = read_bytes(path)?;
-    let text = std::str::from_utf8(&bytes)
-        .map_err(|e| Error::file_line(path, line_of_offset(&bytes, e.valid_up_to()), "not UTF-8 text"))?;
+/// Loads the scene described by the TOML file at `path`, whose bytes are `bytes`, with its
+/// meshes.
+pub(super) fn load_scene(path: &Path, bytes: &[u8]) -> Result<Scene> {
+    let text = std::str::from_utf8(bytes)
+        .map_err(|e| Error::file_line(path, line_of_offset(bytes, e.valid_up_to()), "not UTF-8 text"))?;
     let description: SceneToml = ::toml::from_str(text).map_err(|e| {
         let message = e.message().trim().to_string();
         match e.span() {
-            Some(span) => Error::file_line(path, line_of_offset(&bytes, span.start), message),
+            Some(span) => Error::file_line(path, line_of_offset(bytes, span.start), message),
             None => Error::file(path, message),
         }
     })?;
     // The line where a table starts, for errors about its values.
-    let line_of = |span: std::ops::Range<usize>| line_of_offset(&bytes, span.start);
+    let line_of = |span: std::ops::Range<usize>| line_of_offset(bytes, span.start);
 
     if description.mesh.is_empty() {
         return Err(Error::file(

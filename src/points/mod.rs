@@ -12,6 +12,10 @@
 //! point interpolated on that triangle, and the rays know which triangle they leave; a bare
 //! point gets the bound of any point interpolated in the scene's bounding box. Larger bounds
 //! move origins further off the surface (by about 1e-6 of the coordinates' magnitude).
+//!
+//! [`file`] reads and writes the point files of `hmdist points`.
+
+pub mod file;
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -184,12 +188,17 @@ pub fn hmd_at(
         let done = crate::gpu::gather::gather_points(&gpu, &job, &starts, key, &crate::progress::Silent)?;
         return Ok(done.points.iter().map(|p| p.mean.value()).collect());
     }
-    Ok(starts
+    let hmd = starts
         .par_iter()
         .enumerate()
         .map(|(i, start)| {
+            if crate::interrupt::requested() {
+                return f32::NAN;
+            }
             let key = keys.map_or(i as u64, |k| k[i]);
             query.gather.at(accel, start, query.seed, key, clamp).0
         })
-        .collect())
+        .collect();
+    crate::interrupt::check()?;
+    Ok(hmd)
 }
