@@ -263,3 +263,26 @@ fn a_requested_interruption_stops_a_render_inside_its_pixels() {
     render(&scene, &small, &options, &hmdist::progress::Silent).unwrap();
     println!("interrupted after {seconds:.2} s");
 }
+
+#[cfg(unix)]
+#[test]
+fn sigint_during_a_gpu_gather_exits_130_and_leaves_no_file() {
+    // On the GPU the flag is looked at between dispatches (at most 16 rays per pixel each on
+    // lavapipe, about half a second each on a hardware GPU).
+    let dir = Scratch::new("sigint-gpu-render");
+    let mut args = LONG_RENDER.to_vec();
+    args.extend(["1", "--backend", "gpu", "--out", "long.exr"]);
+    let (code, stderr) = interrupt(start(dir.path(), &args), "INT", Duration::from_secs(2));
+    if code == Some(2)
+        && common::gpu_missing("sigint_during_a_gpu_gather_exits_130_and_leaves_no_file", &stderr)
+    {
+        return;
+    }
+    assert_eq!(code, Some(130), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert_eq!(
+        outputs(dir.path(), &[]),
+        Vec::<String>::new(),
+        "no output, no temporary"
+    );
+}

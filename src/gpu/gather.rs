@@ -176,6 +176,8 @@ pub(crate) fn gather_points(
                 None => (FIRST_DISPATCH_RAYS / batch.len() as u64).clamp(1, most as u64) as u32,
             };
             while first_ray < rays {
+                // Between dispatches of about half a second: Ctrl-C stops within one.
+                crate::interrupt::check()?;
                 let end_ray = first_ray.saturating_add(step).min(rays);
                 let dispatch = Params {
                     count: batch.len() as u32,

@@ -133,6 +133,7 @@ impl GpuScene {
         let mut distances = vec![f32::INFINITY; rays.len()];
         let chunk = 1usize << 22;
         for (part, out) in rays.chunks(chunk).zip(distances.chunks_mut(chunk)) {
+            crate::interrupt::check()?;
             let packed: Vec<[f32; 8]> = part
                 .iter()
                 .map(|r| {

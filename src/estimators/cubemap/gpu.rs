@@ -227,6 +227,7 @@ fn estimate_batches(
     let (mut raster, mut lookup, mut escaped) = (0.0, 0.0, 0);
     progress.start("cube maps", pixels.len() as u64);
     for batch in pixels.chunks(capacity) {
+        crate::interrupt::check()?;
         let cubes: Vec<Cube> = batch.iter().map(|(_, c)| *c).collect();
         let params = Params {
             count: batch.len() as u32,
