@@ -7,6 +7,7 @@ use std::process::ExitCode;
 use clap::Parser;
 
 fn main() -> ExitCode {
+    die_quietly_on_a_closed_pipe();
     let args = cli::Cli::parse();
     let runtime_dir = quiet_headless_vulkan();
     let signals = cli::signals::Signals::catch();
@@ -26,6 +27,18 @@ fn main() -> ExitCode {
         let _ = std::fs::remove_dir(dir);
     }
     code
+}
+
+/// `hmdist diff A B | head -1`: Rust's runtime ignores SIGPIPE, so printing to a pipe whose
+/// reader has gone panics ("failed printing to stdout: Broken pipe"). Restore the default
+/// action, so that hmdist ends quietly there as any Unix tool does. Files are written to a
+/// temporary and renamed, so even then none is left half-written.
+fn die_quietly_on_a_closed_pipe() {
+    #[cfg(unix)]
+    // SAFETY: setting a signal's disposition to its default, before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
 }
 
 /// On a headless Linux machine Mesa's Vulkan driver, probed by the cube map's GPU backend,

@@ -364,3 +364,21 @@ fn diff_of_an_image_with_itself_is_zero_and_mismatched_sizes_exit_2() {
     assert_eq!(mismatch.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&mismatch.stderr).contains("differ in size"));
 }
+
+#[cfg(unix)]
+#[test]
+fn printing_to_a_closed_pipe_is_not_a_panic() {
+    // `hmdist scene info cube | head -0`: the reader is gone before hmdist prints.
+    use std::process::{Command, Stdio};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_hmdist"))
+        .args(["scene", "info", "cube"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(stderr.is_empty(), "{stderr}");
+}
