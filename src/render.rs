@@ -286,14 +286,18 @@ pub(crate) fn pixel_pass(
     let mut hmd = vec![f32::NAN; gbuffer.points.len()];
     // Each pixel's AOVs, only where some are asked for.
     let mut samples = vec![AovSample::default(); if aovs.is_empty() { 0 } else { hmd.len() }];
-    progress.start(work.label(), gbuffer.surface_pixels());
+    let per_pixel = work.progress_per_pixel();
+    progress.start(work.label(), gbuffer.surface_pixels().saturating_mul(per_pixel));
+    // The driver counts each pixel done, unless the workers count their own steps.
+    let silent = crate::progress::Silent;
+    let counted: &dyn Progress = if per_pixel == 1 { progress } else { &silent };
     let rows = hmd.par_chunks_mut(width).zip(gbuffer.points.par_chunks(width));
     let tally = if aovs.is_empty() {
         rows.enumerate()
             .map_init(
-                || work.worker(),
+                || work.worker(progress),
                 |worker, (row, (out, points))| {
-                    pixel_row(worker.as_mut(), row * width, out, points, None, progress)
+                    pixel_row(worker.as_mut(), row * width, out, points, None, counted)
                 },
             )
             .reduce(Tally::default, |a, b| a + b)
@@ -301,10 +305,10 @@ pub(crate) fn pixel_pass(
         rows.zip(samples.par_chunks_mut(width))
             .enumerate()
             .map_init(
-                || work.worker(),
+                || work.worker(progress),
                 |worker, (row, ((out, points), samples))| {
                     let samples = Some(samples);
-                    pixel_row(worker.as_mut(), row * width, out, points, samples, progress)
+                    pixel_row(worker.as_mut(), row * width, out, points, samples, counted)
                 },
             )
             .reduce(Tally::default, |a, b| a + b)
@@ -334,7 +338,7 @@ fn pixel_row(
     out: &mut [f32],
     points: &[Option<crate::accel::Hit>],
     mut samples: Option<&mut [AovSample]>,
-    progress: &dyn Progress,
+    counted: &dyn Progress,
 ) -> Tally {
     let mut tally = Tally::default();
     let mut scratch = AovSample::default();
@@ -349,7 +353,7 @@ fn pixel_row(
             };
             *h = worker.pixel(hit, (first + x) as u64, &mut tally, aov);
             tally.holes += h.is_nan() as u64;
-            progress.advance(1);
+            counted.advance(1);
         }
     }
     tally

@@ -13,7 +13,7 @@ use std::time::{Duration, Instant, SystemTime};
 use common::cli::outputs;
 use common::Scratch;
 use hmdist::error::Error;
-use hmdist::estimators::Gather;
+use hmdist::estimators::{Backend, Cubemap, Gather};
 use hmdist::progress::Progress;
 use hmdist::render::{render, RenderOptions};
 use hmdist::sampling::Weighting;
@@ -210,7 +210,7 @@ impl Progress for Recorder {
 #[test]
 fn progress_counts_surface_pixels_not_rows() {
     // One row of 32 pixels: counted in rows it would be one step, never moving until the
-    // row is done.
+    // row is done. (The CPU cube map counts pixels; gather counts rays, below.)
     let scene = Scene::load("cube").unwrap();
     let options = RenderOptions {
         width: 32,
@@ -219,12 +219,48 @@ fn progress_counts_surface_pixels_not_rows() {
     };
     let progress = Recorder::default();
     let gather = Gather::new(4, Weighting::Cosine).unwrap();
-    let rendered = render(&scene, &gather, &options, &progress).unwrap();
+    let cubemap = Cubemap::new(gather, 4, Backend::Cpu).unwrap();
+    let rendered = render(&scene, &cubemap, &options, &progress).unwrap();
     let surface = 32 - rendered.report.background_pixels as u64;
     assert!(surface > 16, "{surface}");
     assert_eq!(progress.total.load(Ordering::Relaxed), surface);
     assert_eq!(progress.steps.load(Ordering::Relaxed), surface);
     assert_eq!(progress.calls.load(Ordering::Relaxed), surface);
+}
+
+#[test]
+fn gather_progress_moves_within_a_pixel() {
+    // One pixel of 100,000 rays: counted in pixels, the bar would stand still (and show no
+    // ETA) until the pixel is done; counted in rays it moves every 16,384 rays.
+    let scene = Scene::load("cube").unwrap();
+    let options = RenderOptions {
+        width: 1,
+        height: 1,
+        ..RenderOptions::default()
+    };
+    let progress = Recorder::default();
+    for rounds in [1, 4] {
+        progress.steps.store(0, Ordering::Relaxed);
+        progress.calls.store(0, Ordering::Relaxed);
+        let gather = Gather::new(100_000, Weighting::Cosine)
+            .unwrap()
+            .with_rounds(rounds)
+            .unwrap();
+        render(&scene, &gather, &options, &progress).unwrap();
+        assert_eq!(progress.total.load(Ordering::Relaxed), 100_000);
+        assert_eq!(progress.steps.load(Ordering::Relaxed), 100_000, "{rounds} rounds");
+        // 25,000 rays a round: one step at 16,384 and the rest at its end.
+        let calls = if rounds == 1 {
+            100_000 / 16_384 + 1
+        } else {
+            2 * rounds
+        };
+        assert_eq!(
+            progress.calls.load(Ordering::Relaxed),
+            calls as u64,
+            "{rounds} rounds"
+        );
+    }
 }
 
 #[test]

@@ -143,7 +143,7 @@ impl PixelWork for AdaptivePixels<'_> {
         true
     }
 
-    fn worker(&self) -> Box<dyn PixelWorker + '_> {
+    fn worker<'w>(&'w self, _: &'w dyn Progress) -> Box<dyn PixelWorker + 'w> {
         Box::new(*self)
     }
 

@@ -417,11 +417,30 @@ impl PointGather {
         n: u32,
         clamp: DistanceClamp,
     ) {
+        self.round_counted(accel, start, (seed, key), n, clamp, &crate::progress::Silent);
+    }
+
+    /// [`PointGather::round`], adding its `n` rays to `progress` as it goes (every
+    /// [`crate::interrupt::POLL_RAYS`] rays, where it also looks at the interrupt flag).
+    #[inline]
+    pub fn round_counted<R: RayCaster>(
+        &mut self,
+        accel: &R,
+        start: &GatherStart,
+        (seed, key): (u64, u64),
+        n: u32,
+        clamp: DistanceClamp,
+        progress: &dyn Progress,
+    ) {
         let frame = start.frame;
         let mut inverse_sum = 0.0f64;
+        let poll = crate::interrupt::POLL_RAYS as usize;
         for (j, w) in round_directions(self.weighting, seed, key, self.rounds, n).enumerate() {
-            if crate::interrupt::stop_at_ray(j) {
-                break; // the pass ends with Error::Interrupted; this H is never seen
+            if j % poll == poll - 1 {
+                if crate::interrupt::requested() {
+                    break; // the pass ends with Error::Interrupted; this H is never seen
+                }
+                progress.advance(poll as u64);
             }
             let d = accel.hit_distance(start.origin, frame.to_world(w), clamp.max, start.leaving);
             self.escaped += d.is_infinite() as u32;
@@ -439,6 +458,7 @@ impl PointGather {
                 }
             }
         }
+        progress.advance(n as u64 % poll as u64);
         self.end_round(inverse_sum, n);
     }
 
@@ -521,8 +541,15 @@ impl PixelWork for GatherPixels<'_> {
         true
     }
 
-    fn worker(&self) -> Box<dyn PixelWorker + '_> {
-        Box::new(*self)
+    fn progress_per_pixel(&self) -> u64 {
+        self.gather.rays as u64
+    }
+
+    fn worker<'w>(&'w self, progress: &'w dyn Progress) -> Box<dyn PixelWorker + 'w> {
+        Box::new(GatherWorker {
+            pixels: *self,
+            progress,
+        })
     }
 
     fn details(&self, _: &PixelPass) -> Details {
@@ -534,14 +561,27 @@ impl PixelWork for GatherPixels<'_> {
     }
 }
 
-impl PixelWorker for GatherPixels<'_> {
+/// One thread's `gather` pixels, counting their rays as progress.
+struct GatherWorker<'w> {
+    pixels: GatherPixels<'w>,
+    progress: &'w dyn Progress,
+}
+
+impl PixelWorker for GatherWorker<'_> {
     fn pixel(&mut self, hit: &Hit, pixel: u64, tally: &mut Tally, aov: &mut AovSample) -> f32 {
-        let (c, g) = (self.context, self.gather);
+        let (c, g) = (self.pixels.context, self.pixels.gather);
         let start = GatherStart::at_hit(hit);
-        let mut point = PointGather::new(g.weighting, self.ao_radius);
+        let mut point = PointGather::new(g.weighting, self.pixels.ao_radius);
         let per_round = g.rays / g.rounds;
         for _ in 0..g.rounds {
-            point.round(c.accel, &start, c.seed, pixel, per_round, c.clamp);
+            point.round_counted(
+                c.accel,
+                &start,
+                (c.seed, pixel),
+                per_round,
+                c.clamp,
+                self.progress,
+            );
         }
         point.finish(tally, aov);
         point.mean.value()

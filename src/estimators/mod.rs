@@ -168,8 +168,16 @@ pub trait PixelWork: Sync {
     /// Records the pixel pass's seconds under the estimator's own phase name, if it has one.
     fn record_phase(&self, _phases: &mut PhaseSeconds, _seconds: f64) {}
 
-    /// A worker for one thread, with its own scratch (the CPU cube map's texel cache).
-    fn worker(&self) -> Box<dyn PixelWorker + '_>;
+    /// Progress steps per surface pixel: 1, which the driver counts as each pixel is done;
+    /// or more (`gather`: its rays), which the worker counts itself as it goes, exactly this
+    /// many per pixel, so that a pass whose pixels take long still shows its rate and ETA.
+    fn progress_per_pixel(&self) -> u64 {
+        1
+    }
+
+    /// A worker for one thread, with its own scratch (the CPU cube map's texel cache), and
+    /// the pass's `progress` where [`PixelWork::progress_per_pixel`] is above 1.
+    fn worker<'w>(&'w self, progress: &'w dyn Progress) -> Box<dyn PixelWorker + 'w>;
 
     /// The method-specific figures of the report, once every pixel is done.
     fn details(&self, pass: &PixelPass) -> Details;

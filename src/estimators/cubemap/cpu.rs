@@ -8,6 +8,7 @@
 use super::Cubemap;
 use crate::accel::{Hit, RayCaster};
 use crate::estimators::{AovSample, EstimateContext, HarmonicMean, PixelPass, PixelWork, PixelWorker, Tally};
+use crate::progress::Progress;
 use crate::report::{CubemapDetails, Details, DeviceDetails, PhaseSeconds};
 use crate::sampling::Frame;
 
@@ -31,7 +32,7 @@ impl PixelWork for CpuPixels<'_> {
         phases.cubemap_build_and_lookup = Some(seconds);
     }
 
-    fn worker(&self) -> Box<dyn PixelWorker + '_> {
+    fn worker<'w>(&'w self, _: &'w dyn Progress) -> Box<dyn PixelWorker + 'w> {
         let texels = self.cubemap.hemicube.texel_count();
         Box::new(TexelCache {
             pixels: self,

@@ -388,7 +388,7 @@ impl PixelWork for PhotonPixels<'_> {
         phases.gather = Some(seconds);
     }
 
-    fn worker(&self) -> Box<dyn PixelWorker + '_> {
+    fn worker<'w>(&'w self, _: &'w dyn Progress) -> Box<dyn PixelWorker + 'w> {
         Box::new(PhotonWorker {
             pixels: self,
             scratch: GatherScratch::default(),
