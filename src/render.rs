@@ -3,8 +3,8 @@
 //! It owns the loops over pixels: primary rays, then the estimator's pixels, rows in
 //! parallel, with progress, ray and hole counts and timings; an estimator implements one
 //! pixel ([`crate::estimators::PixelWorker`]). The output depends only on (scene, camera,
-//! method, parameters, seed): never on `threads`. Progress is counted in surface pixels, so a
-//! slow row still moves the bar; every loop stops early, with [`Error::Interrupted`], once
+//! method, parameters, seed): never on `threads`. Progress is counted in surface pixels (or in
+//! the work's own steps, such as gather's rays), so a slow row or pixel still moves the bar; every loop stops early, with [`Error::Interrupted`], once
 //! [`crate::interrupt::request`] is called.
 
 use std::time::Instant;
@@ -273,7 +273,7 @@ pub fn estimate(
 
 /// The driver's loop over the estimator's pixels: rows in parallel, one worker (with its
 /// scratch) per rayon job, NaN for background, holes counted, the AOVs in `aovs` kept; progress
-/// in surface pixels. The image does not depend on how rows are split among threads.
+/// in surface pixels, or in [`PixelWork::progress_per_pixel`] steps each. The image does not depend on how rows are split among threads.
 /// [`Error::Interrupted`] if [`crate::interrupt::request`] was called before it finished.
 pub(crate) fn pixel_pass(
     work: &dyn PixelWork,
@@ -320,14 +320,7 @@ pub(crate) fn pixel_pass(
         pixels: gbuffer.surface_pixels(),
         seconds: start.elapsed().as_secs_f64(),
     };
-    let channels = aovs
-        .iter()
-        .map(|&aov| AovImage {
-            aov,
-            data: samples.iter().map(|s| s.get(aov)).collect(),
-        })
-        .collect();
-    Ok((hmd, channels, pass))
+    Ok((hmd, AovImage::channels(aovs, &samples), pass))
 }
 
 /// One row of the pixel pass, whose first pixel has index `first`; it stops early once an

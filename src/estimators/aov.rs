@@ -99,3 +99,15 @@ pub struct AovImage {
     /// Its value per pixel.
     pub data: Vec<f32>,
 }
+
+impl AovImage {
+    /// The images of `aovs`, in that order, from each pixel's samples.
+    pub fn channels(aovs: &[Aov], samples: &[AovSample]) -> Vec<AovImage> {
+        aovs.iter()
+            .map(|&aov| AovImage {
+                aov,
+                data: samples.iter().map(|s| s.get(aov)).collect(),
+            })
+            .collect()
+    }
+}

@@ -265,14 +265,7 @@ pub(crate) fn estimate(
         let aov = samples.get_mut(pixel).unwrap_or(&mut scratch);
         point.finish(&mut tally, aov);
     }
-    let aovs = context
-        .aovs
-        .iter()
-        .map(|&aov| AovImage {
-            aov,
-            data: samples.iter().map(|s| s.get(aov)).collect(),
-        })
-        .collect();
+    let aovs = AovImage::channels(context.aovs, &samples);
     let trace_seconds = done.trace_seconds + extra;
     Ok(Estimate {
         hmd,

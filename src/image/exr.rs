@@ -65,7 +65,7 @@ fn read_named(path: &Path, name: &str, only_channel_will_do: bool) -> Result<Hmd
     decode_named(&bytes, path, name, only_channel_will_do)
 }
 
-/// [`read`] of the file at `path` whose bytes are `bytes`.
+/// [`read()`] of the file at `path` whose bytes are `bytes`.
 pub fn decode(bytes: &[u8], path: &Path) -> Result<HmdImage> {
     decode_named(bytes, path, CHANNEL, true)
 }

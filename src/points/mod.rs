@@ -13,7 +13,7 @@
 //! point gets the bound of any point interpolated in the scene's bounding box. Larger bounds
 //! move origins further off the surface (by about 1e-6 of the coordinates' magnitude).
 //!
-//! [`file`] reads and writes the point files of `hmdist points`.
+//! [`mod@file`] reads and writes the point files of `hmdist points`.
 
 pub mod file;
 

@@ -78,7 +78,8 @@ impl Cubemap {
             Backend::Cpu => None,
             Backend::Gpu => Some(gpu::Gpu::open(true)?),
             // A software rasteriser is slower than the CPU backend: auto wants real hardware.
-            Backend::Auto => gpu::Gpu::open(false).ok(),
+            Backend::Auto if crate::gpu::hardware_adapter() => gpu::Gpu::open(false).ok(),
+            Backend::Auto => None,
         })
     }
 }
