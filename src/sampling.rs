@@ -43,19 +43,43 @@ fn mix64(mut x: u64) -> u64 {
 /// 64 random bits keyed by (seed, stream, counter): a counter-based generator.
 #[inline(always)]
 pub fn random_bits(seed: u64, stream: u64, counter: u64) -> u64 {
-    let key = mix64(seed ^ 0x9E37_79B9_7F4A_7C15);
-    mix64(mix64(key ^ stream).wrapping_add(counter.wrapping_mul(0x9E37_79B9_7F4A_7C15)))
+    Stream::new(seed, stream).bits(counter)
 }
 
 /// Two independent uniforms in [0, 1) from one draw of 64 bits.
 #[inline(always)]
 pub fn random_pair(seed: u64, stream: u64, counter: u64) -> Vec2 {
-    let bits = random_bits(seed, stream, counter);
-    let scale = 1.0 / (1u32 << 24) as f32;
-    Vec2::new(
-        (bits >> 40) as f32 * scale,
-        ((bits >> 8) & 0xFF_FFFF) as f32 * scale,
-    )
+    Stream::new(seed, stream).pair(counter)
+}
+
+/// One stream of [`random_bits`] (seed and stream fixed), its key mixed once: the same
+/// numbers for less work where one stream gives many (a point's gather rays).
+#[derive(Clone, Copy, Debug)]
+pub struct Stream(u64);
+
+impl Stream {
+    /// The stream `stream` of seed `seed`.
+    #[inline(always)]
+    pub fn new(seed: u64, stream: u64) -> Self {
+        Stream(mix64(mix64(seed ^ 0x9E37_79B9_7F4A_7C15) ^ stream))
+    }
+
+    /// [`random_bits`]`(seed, stream, counter)`.
+    #[inline(always)]
+    pub fn bits(self, counter: u64) -> u64 {
+        mix64(self.0.wrapping_add(counter.wrapping_mul(0x9E37_79B9_7F4A_7C15)))
+    }
+
+    /// [`random_pair`]`(seed, stream, counter)`.
+    #[inline(always)]
+    pub fn pair(self, counter: u64) -> Vec2 {
+        let bits = self.bits(counter);
+        let scale = 1.0 / (1u32 << 24) as f32;
+        Vec2::new(
+            (bits >> 40) as f32 * scale,
+            ((bits >> 8) & 0xFF_FFFF) as f32 * scale,
+        )
+    }
 }
 
 /// The `a × b` stratification grid for `n` samples: the most nearly square factorisation,
@@ -73,7 +97,13 @@ pub fn strata(n: u32) -> (u32, u32) {
 /// [`strata`]: stratum `(j mod a, j div a)`, jittered by `xi`.
 #[inline(always)]
 pub fn stratified(j: u32, (a, b): (u32, u32), xi: Vec2) -> Vec2 {
-    let (i, k) = (j % a, j / a);
+    in_stratum((j % a, j / a), (a, b), xi)
+}
+
+/// The point of stratum `(i, k)` of the `a × b` grid jittered by `xi`: [`stratified`] for a
+/// caller that knows the stratum.
+#[inline(always)]
+pub fn in_stratum((i, k): (u32, u32), (a, b): (u32, u32), xi: Vec2) -> Vec2 {
     // Keep the sample strictly below 1 so the map never produces the horizon exactly.
     Vec2::new(
         ((i as f32 + xi.x) / a as f32).min(1.0 - f32::EPSILON),

@@ -23,7 +23,7 @@ use super::kernel::{Kernel, RayData};
 use super::traverse::{closest, stack_size, Closest, Counter, Entry, TraversalStats};
 use super::triangle::barycentric_point_error;
 use super::wide::{BinaryBuilder, WideBvh, WIDTH};
-use super::{Hit, RayCaster};
+use super::{Hit, RayCaster, PACKET};
 use crate::scene::Mesh;
 
 /// BVH build presets: build time against trace speed.
@@ -164,6 +164,87 @@ impl Accel {
             .map_or(f32::INFINITY, |c| c.t)
     }
 
+    /// [`RayCaster::hit_distances`], counting the nodes (once per packet visit) and leaf
+    /// blocks (once per ray) it visits.
+    pub fn hit_distances_counted(
+        &self,
+        origins: &[Vec3],
+        directions: &[Vec3],
+        leaving: &[Option<u32>],
+        t_max: f32,
+        out: &mut [f32],
+        stats: &mut TraversalStats,
+    ) {
+        self.cast_packet(origins, directions, leaving, t_max, out, stats);
+    }
+
+    /// Up to [`PACKET`] rays: as a packet where the kernel has one, else ray by ray.
+    #[inline]
+    fn cast_packet<C: Counter>(
+        &self,
+        origins: &[Vec3],
+        directions: &[Vec3],
+        leaving: &[Option<u32>],
+        t_max: f32,
+        out: &mut [f32],
+        counter: &mut C,
+    ) {
+        let n = directions.len();
+        assert!(
+            n <= PACKET && origins.len() == n && leaving.len() == n && out.len() >= n,
+            "hit_distances: {n} rays (at most {PACKET}), {} origins, {} leaving, {} outputs",
+            origins.len(),
+            leaving.len(),
+            out.len()
+        );
+        #[cfg(target_arch = "x86_64")]
+        if n >= 2 && matches!(self.kernel, Kernel::Avx2 | Kernel::Avx512) {
+            use super::packet::{closest_packet_avx2, closest_packet_avx512, PacketEntry};
+            use super::traverse::Search;
+            let rays: [RayData; PACKET] =
+                std::array::from_fn(|i| RayData::new(origins[i.min(n - 1)], directions[i.min(n - 1)]));
+            let accept: [_; PACKET] = std::array::from_fn(|i| {
+                let leaving = leaving[i.min(n - 1)];
+                move |block: u32, lane: usize| self.may_take_within_error_hit(leaving, block, lane)
+            });
+            let mut searches: [Search; PACKET] = std::array::from_fn(|i| Search::new(t_max, &accept[i]));
+            let needed = stack_size(self.bvh.depth);
+            let mut inline = [MaybeUninit::<Entry>::uninit(); INLINE_STACK];
+            let mut inline_packet = [MaybeUninit::<PacketEntry>::uninit(); INLINE_STACK];
+            let (mut heap, mut heap_packet) = (Vec::new(), Vec::new());
+            let (stack, packet_stack) = if needed <= INLINE_STACK {
+                (&mut inline[..], &mut inline_packet[..])
+            } else {
+                heap.resize(needed, MaybeUninit::uninit());
+                heap_packet.resize(needed, MaybeUninit::uninit());
+                (&mut heap[..], &mut heap_packet[..])
+            };
+            let (bvh, searches) = (&self.bvh, &mut searches[..n]);
+            // SAFETY: `with_kernel` and `Kernel::from_env` only choose kernels the CPU has.
+            unsafe {
+                if self.kernel == Kernel::Avx2 {
+                    closest_packet_avx2(bvh, &rays[..n], searches, packet_stack, stack, counter);
+                } else {
+                    closest_packet_avx512(bvh, &rays[..n], searches, packet_stack, stack, counter);
+                }
+            }
+            for (out, search) in out.iter_mut().zip(searches.iter()) {
+                *out = search.result().map_or(f32::INFINITY, |c| c.t);
+            }
+            return;
+        }
+        for i in 0..n {
+            out[i] = self
+                .trace(
+                    &RayData::new(origins[i], directions[i]),
+                    t_max,
+                    leaving[i],
+                    counter,
+                )
+                .map_or(f32::INFINITY, |c| c.t);
+        }
+    }
+
     /// The closest hit along `ray`, with the kernel chosen at build; `None` for a ray with a
     /// NaN or infinite component, which would pass every box test (`maxps`/`minps` drop a NaN)
     /// and reach empty slots.
@@ -266,6 +347,18 @@ impl RayCaster for Accel {
     fn hit_distance(&self, origin: Vec3, direction: Vec3, t_max: f32, leaving: Option<u32>) -> f32 {
         self.trace(&RayData::new(origin, direction), t_max, leaving, &mut ())
             .map_or(f32::INFINITY, |c| c.t)
+    }
+
+    #[inline]
+    fn hit_distances(
+        &self,
+        origins: &[Vec3],
+        directions: &[Vec3],
+        leaving: &[Option<u32>],
+        t_max: f32,
+        out: &mut [f32],
+    ) {
+        self.cast_packet(origins, directions, leaving, t_max, out, &mut ());
     }
 }
 

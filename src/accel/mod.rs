@@ -25,6 +25,8 @@
 mod bvh;
 pub(crate) mod float_error;
 mod kernel;
+#[cfg(target_arch = "x86_64")]
+mod packet;
 mod sah;
 mod traverse;
 mod triangle;
@@ -68,4 +70,25 @@ pub trait RayCaster: Sync {
 
     /// Distance to the first hit, `+inf` if the ray escapes (cheaper than `closest_hit`).
     fn hit_distance(&self, origin: Vec3, direction: Vec3, t_max: f32, leaving: Option<u32>) -> f32;
+
+    /// [`RayCaster::hit_distance`] of up to [`PACKET`] rays at once: `out[i]` is exactly what
+    /// `hit_distance(origins[i], directions[i], t_max, leaving[i])` gives, bit for bit.
+    /// `origins`, `directions` and `leaving` have one length, at most [`PACKET`], and `out` at
+    /// least that. Rays from nearby points in nearby directions (the same stratum of
+    /// neighbouring pixels) are traversed together, sharing each node's visit.
+    fn hit_distances(
+        &self,
+        origins: &[Vec3],
+        directions: &[Vec3],
+        leaving: &[Option<u32>],
+        t_max: f32,
+        out: &mut [f32],
+    ) {
+        for (i, out) in out.iter_mut().enumerate().take(directions.len()) {
+            *out = self.hit_distance(origins[i], directions[i], t_max, leaving[i]);
+        }
+    }
 }
+
+/// The most rays [`RayCaster::hit_distances`] casts at once: one per AVX2 lane.
+pub const PACKET: usize = 8;

@@ -21,11 +21,11 @@ use super::{
     Aov, AovSample, DistanceClamp, EstimateContext, Estimator, GBuffer, HarmonicMean, PixelPass, PixelWork,
     PixelWorker, Tally, Work,
 };
-use crate::accel::{Hit, RayCaster};
+use crate::accel::{Hit, RayCaster, PACKET};
 use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::report::{Details, DeviceDetails, GatherParameters, Parameters};
-use crate::sampling::{hemisphere, random_pair, strata, stratified, Frame, Weighting};
+use crate::sampling::{hemisphere, in_stratum, random_pair, strata, stratified, Frame, Stream, Weighting};
 
 /// Default gather rays per pixel for `hmdist render`: an 8 × 8 stratified grid, a clean
 /// picture of `cube` at 1024² in about 10 s on 2 cores. The paper's reference uses 65,536;
@@ -370,6 +370,77 @@ pub(crate) fn round_directions(
     })
 }
 
+/// How a round's rays are grouped into packets for [`RayCaster::hit_distances`]: spans of
+/// consecutive ray indices (`span` rays: two rows of the strata grid, or [`PACKET`]), each
+/// cast as packets of up to [`PACKET`] rays: 4 × 2 blocks of neighbouring strata where the
+/// grid's `a × b` allow (`a` a multiple of 4, `b` of 2), else runs of 8 in ray order. Ray
+/// `j` is stratum `(j mod a, j div a)`, so two grid rows are consecutive indices.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Packets {
+    a: u32,
+    blocks: bool,
+    /// Rays per span.
+    pub span: u32,
+}
+
+/// The packets of an `a × b` strata grid; see [`Packets`].
+pub(crate) fn packets((a, b): (u32, u32)) -> Packets {
+    let blocks = a.is_multiple_of(4) && b.is_multiple_of(2) && a >= 4;
+    Packets {
+        a,
+        blocks,
+        span: if blocks { 2 * a } else { PACKET as u32 },
+    }
+}
+
+/// A packet: up to [`PACKET`] ray indices and their strata `(i, k)`.
+pub(crate) struct Packet {
+    index: [u32; PACKET],
+    stratum: [(u32, u32); PACKET],
+    len: usize,
+}
+
+impl Packet {
+    /// The rays: index and stratum.
+    fn iter(&self) -> impl Iterator<Item = (u32, (u32, u32))> + '_ {
+        self.index[..self.len]
+            .iter()
+            .copied()
+            .zip(self.stratum[..self.len].iter().copied())
+    }
+
+    fn len(&self) -> usize {
+        self.len
+    }
+}
+
+impl Packets {
+    /// The packets of the span of `count` rays from ray `base` (a multiple of `span`).
+    pub fn within(self, base: u32, count: u32) -> impl Iterator<Item = Packet> {
+        let (a, blocks) = (self.a, self.blocks);
+        let packets = if blocks { count / PACKET as u32 } else { 1 };
+        (0..packets).map(move |p| {
+            if blocks {
+                // Block p covers columns 4p .. 4p + 3 of the span's two rows.
+                let row = base / a;
+                let stratum = std::array::from_fn(|q| (4 * p + (q % 4) as u32, row + (q / 4) as u32));
+                Packet {
+                    index: stratum.map(|(i, k)| k * a + i),
+                    stratum,
+                    len: PACKET,
+                }
+            } else {
+                let index: [u32; PACKET] = std::array::from_fn(|q| base + q as u32);
+                Packet {
+                    index,
+                    stratum: index.map(|j| (j % a, j / a)),
+                    len: count as usize,
+                }
+            }
+        })
+    }
+}
+
 /// One point's gather so far, round by round: H, its error bar and the AOVs.
 pub(crate) struct PointGather {
     weighting: Weighting,
@@ -422,6 +493,10 @@ impl PointGather {
 
     /// [`PointGather::round`], adding its `n` rays to `progress` as it goes (every
     /// [`crate::interrupt::POLL_RAYS`] rays, where it also looks at the interrupt flag).
+    ///
+    /// The rays are cast as packets of [`PACKET`] neighbouring strata (4 × 2 blocks of the
+    /// grid where it divides so, else runs of 8 in ray order: see [`packets`]); their
+    /// distances are summed in ray order, so H is the same bits as one ray at a time.
     #[inline]
     pub fn round_counted<R: RayCaster>(
         &mut self,
@@ -432,33 +507,63 @@ impl PointGather {
         clamp: DistanceClamp,
         progress: &dyn Progress,
     ) {
-        let frame = start.frame;
+        let grid = strata(n);
+        let random = Stream::new(seed, key);
+        let first = self.rounds as u64 * n as u64;
         let mut inverse_sum = 0.0f64;
-        let poll = crate::interrupt::POLL_RAYS as usize;
-        for (j, w) in round_directions(self.weighting, seed, key, self.rounds, n).enumerate() {
-            if j % poll == poll - 1 {
+        let poll = crate::interrupt::POLL_RAYS as u64;
+        let mut pending = 0u64;
+        // Distances and local directions of the rays of one span of ray indices.
+        let span = packets(grid).span as usize;
+        let (mut distances, mut local) = (vec![0.0f32; span], vec![Vec3::ZERO; span]);
+        let (origins, leaving) = ([start.origin; PACKET], [start.leaving; PACKET]);
+        for (base, count) in (0..n)
+            .step_by(span)
+            .map(|base| (base, span.min((n - base) as usize)))
+        {
+            for packet in packets(grid).within(base, count as u32) {
+                let mut directions = [Vec3::ZERO; PACKET];
+                for (q, (j, stratum)) in packet.iter().enumerate() {
+                    let u = in_stratum(stratum, grid, random.pair(first + j as u64));
+                    let w = hemisphere(self.weighting, u);
+                    local[(j - base) as usize] = w;
+                    directions[q] = start.frame.to_world(w);
+                }
+                let mut t = [0.0f32; PACKET];
+                let k = packet.len();
+                accel.hit_distances(&origins[..k], &directions[..k], &leaving[..k], clamp.max, &mut t);
+                for (q, (j, _)) in packet.iter().enumerate() {
+                    distances[(j - base) as usize] = t[q];
+                }
+            }
+            for (&d, w) in distances[..count].iter().zip(&local[..count]) {
+                self.escaped += d.is_infinite() as u32;
+                self.dmin = self.dmin.min(d);
+                inverse_sum += self.mean.add_inverse(d, clamp);
+                if let Some(radius) = self.ao_radius {
+                    // Cosine-weighted: cosine-distributed directions weigh 1, uniform ones cos θ.
+                    let weight = match self.weighting {
+                        Weighting::Cosine => 1.0,
+                        Weighting::Uniform => w.z as f64,
+                    };
+                    self.ao_total += weight;
+                    if d > radius {
+                        self.ao_open += weight;
+                    }
+                }
+            }
+            pending += count as u64;
+            if pending >= poll {
                 if crate::interrupt::requested() {
                     break; // the pass ends with Error::Interrupted; this H is never seen
                 }
-                progress.advance(poll as u64);
-            }
-            let d = accel.hit_distance(start.origin, frame.to_world(w), clamp.max, start.leaving);
-            self.escaped += d.is_infinite() as u32;
-            self.dmin = self.dmin.min(d);
-            inverse_sum += self.mean.add_inverse(d, clamp);
-            if let Some(radius) = self.ao_radius {
-                // Cosine-weighted: cosine-distributed directions weigh 1, uniform ones cos θ.
-                let weight = match self.weighting {
-                    Weighting::Cosine => 1.0,
-                    Weighting::Uniform => w.z as f64,
-                };
-                self.ao_total += weight;
-                if d > radius {
-                    self.ao_open += weight;
+                while pending >= poll {
+                    progress.advance(poll);
+                    pending -= poll;
                 }
             }
         }
-        progress.advance(n as u64 % poll as u64);
+        progress.advance(pending);
         self.end_round(inverse_sum, n);
     }
 

@@ -198,10 +198,18 @@ struct Closest {
     t: f32,
     // The block lane of the triangle hit.
     lane: u32,
+    // The triangle's index in the mesh: among hits at equal t the lowest wins, as on the CPU,
+    // so the answer does not depend on the visit order.
+    triangle: u32,
 };
 
-// The first hit along origin + t direction, 0 < t <= t_max, visiting children nearest first
-// as the CPU does; hits within their own error bound are kept aside and taken only where
+// Whether a hit at t on triangle beats c (traverse.rs Closest::beaten_by).
+fn beats(t: f32, triangle: u32, c: Closest) -> bool {
+    return t < c.t || (t == c.t && triangle < c.triangle);
+}
+
+// The first hit along origin + t direction, 0 < t < t_max, visiting children nearest first
+// as the CPU does (ties of t go to the lowest triangle index, whatever the order); hits within their own error bound are kept aside and taken only where
 // nothing else is hit (and may_take_within_error_hit allows).
 fn closest_hit(origin: vec3<f32>, direction: vec3<f32>, t_max: f32, leaving: u32, stack: ptr<function, Stack>) -> Closest {
     let r = make_ray(origin, direction);
@@ -260,18 +268,23 @@ fn closest_hit(origin: vec3<f32>, direction: vec3<f32>, t_max: f32, leaving: u32
             let count = (current & 7u) + 1u;
             for (var k = 0u; k < count; k++) {
                 let lane = 8u * block + k;
-                let hit = intersect(r, corner(lane, 0u).xyz, corner(lane, 1u).xyz, corner(lane, 2u).xyz, best.t);
-                if hit.hit {
+                // Widened, so that a hit whose t equals the best one reaches the exact
+                // comparison (traverse.rs Search::leaf).
+                let hit = intersect(r, corner(lane, 0u).xyz, corner(lane, 1u).xyz, corner(lane, 2u).xyz, best.t * far_scale);
+                let triangle = bitcast<u32>(corner(lane, 0u).w);
+                if hit.hit && hit.t < t_max {
                     if !hit.within_error {
-                        if hit.t < best.t {
+                        if (!best.hit && hit.t < best.t) || (best.hit && beats(hit.t, triangle, best)) {
                             best.hit = true;
                             best.t = hit.t;
                             best.lane = lane;
+                            best.triangle = triangle;
                         }
-                    } else if (!doubtful.hit || hit.t < doubtful.t) && may_take_within_error_hit(leaving, lane) {
+                    } else if (!doubtful.hit || beats(hit.t, triangle, doubtful)) && may_take_within_error_hit(leaving, lane) {
                         doubtful.hit = true;
                         doubtful.t = hit.t;
                         doubtful.lane = lane;
+                        doubtful.triangle = triangle;
                     }
                 }
             }
