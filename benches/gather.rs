@@ -3,7 +3,9 @@
 //!
 //! `cargo bench --bench gather` prints, per scene and BVH preset: build seconds, bytes per
 //! triangle, and for each ray count N: gather Mrays/s with all cores and with one thread,
-//! nodes and leaf blocks (of 8 triangles) visited per ray. Environment:
+//! node visits per ray (single-ray and packet: a packet visit tests the node for up to 8
+//! rays) and leaf blocks per ray, and the nanoseconds per ray of generating the directions,
+//! casting them and summing 1/d, timed apart on one thread. Environment:
 //! `HMDIST_BENCH_SCENES=cube,hall` (default), `HMDIST_BENCH_SIZE=256` (image side),
 //! `HMDIST_BENCH_RAYS=64,256,4096` (N; fewer pixels are used for large N so that each run
 //! casts about 16.8 M rays), `HMDIST_BENCH_PRESETS=fast,high`, `HMDIST_BENCH_KERNELS=` (e.g.
@@ -18,11 +20,12 @@
 
 use std::time::Instant;
 
-use hmdist::accel::{Accel, BuildQuality, Kernel, TraversalStats};
-use hmdist::estimators::{DistanceClamp, EstimateContext, GBuffer, Gather};
+use glam::Vec3;
+use hmdist::accel::{Accel, BuildQuality, Kernel, TraversalStats, PACKET};
+use hmdist::estimators::{DistanceClamp, EstimateContext, GBuffer, Gather, HarmonicMean};
 use hmdist::progress::Silent;
 use hmdist::render::primary_hits;
-use hmdist::sampling::Weighting;
+use hmdist::sampling::{hemisphere, in_stratum, strata, Frame, Stream, Weighting};
 use hmdist::scene::Scene;
 
 fn list(name: &str, default: &str) -> Vec<String> {
@@ -44,7 +47,7 @@ fn main() {
         .map(|k| Kernel::parse(k).expect("a kernel this CPU has"))
         .collect();
     println!(
-        "scene  triangles  preset  build_s  B/tri  kernel   rays  pixels  Mrays/s(all)  Mrays/s(1)  nodes/ray  blocks/ray  escaped"
+        "scene  triangles  preset  build_s  B/tri  kernel   rays  pixels  Mrays/s(all)  Mrays/s(1)  nodes/ray  packet_nodes/ray  blocks/ray  escaped  ns/ray: generate  cast  sum"
     );
     for name in list("HMDIST_BENCH_SCENES", "cube,hall") {
         let scene = Scene::load(&name).expect("built-in scene");
@@ -66,14 +69,19 @@ fn main() {
                     let side = ((16_777_216.0 / rays as f64).sqrt() as u32).clamp(8, size);
                     let gbuffer = primary_hits(&a, &scene, side, side);
                     let (all, one, escaped) = throughput(&a, &scene, &gbuffer, rays);
-                    let stats = traversal(&a, &gbuffer, rays);
+                    let (stats, split) = traversal(&a, &gbuffer, rays);
+                    let per_ray = |count: u64| count as f64 / stats_rays(&gbuffer, rays) as f64;
                     println!(
-                        "{name:<6} {:>9}  {preset:<6} {build:>7.2}  {bytes_per_triangle:>5.0}  {:<7} {rays:>5}  {:>5}²  {all:>12.2}  {one:>10.2}  {:>9.2}  {:>10.2}  {escaped:>7}",
+                        "{name:<6} {:>9}  {preset:<6} {build:>7.2}  {bytes_per_triangle:>5.0}  {:<7} {rays:>5}  {:>5}²  {all:>12.2}  {one:>10.2}  {:>9.2}  {:>16.3}  {:>10.2}  {escaped:>7}  {:>16.0}  {:>4.0}  {:>3.0}",
                         scene.mesh.triangle_count(),
                         kernel.name(),
                         side,
-                        stats.nodes as f64 / stats_rays(&gbuffer, rays) as f64,
-                        stats.blocks as f64 / stats_rays(&gbuffer, rays) as f64,
+                        per_ray(stats.nodes),
+                        per_ray(stats.packet_nodes),
+                        per_ray(stats.blocks),
+                        split[0],
+                        split[1],
+                        split[2],
                     );
                 }
                 accel = Some(a);
@@ -184,15 +192,74 @@ fn stats_rays(gbuffer: &GBuffer, rays: u32) -> u64 {
     stats_pixels(gbuffer).count() as u64 * rays as u64
 }
 
-/// Nodes and leaf blocks visited by the same gather rays as the estimator casts.
-fn traversal(accel: &Accel, gbuffer: &GBuffer, rays: u32) -> TraversalStats {
-    let gather = Gather::new(rays, Weighting::Cosine).unwrap();
-    let mut stats = TraversalStats::default();
-    for (pixel, hit) in stats_pixels(gbuffer) {
-        let (origin, directions) = gather.rays(hit, 1, pixel as u64);
-        for dir in directions {
-            accel.hit_distance_counted(origin, dir, f32::INFINITY, Some(hit.triangle), &mut stats);
+/// Nodes (single-ray and packet visits) and leaf blocks visited by the same gather rays as
+/// the estimator casts, cast as it casts them (packets of 4 × 2 neighbouring strata, else 8
+/// in ray order); and the nanoseconds per ray, on one thread, of the gather's three parts
+/// timed apart: generate (random numbers, strata, the cosine map, the frame), cast, and sum
+/// (clamp, 1/d in f64 in ray order).
+fn traversal(accel: &Accel, gbuffer: &GBuffer, rays: u32) -> (TraversalStats, [f64; 3]) {
+    let (a, b) = strata(rays);
+    let blocks = a % 4 == 0 && b % 2 == 0;
+    let n = rays as usize;
+    let pixels: Vec<_> = stats_pixels(gbuffer).collect();
+    let mut directions = vec![Vec3::ZERO; pixels.len() * n];
+    let start = Instant::now();
+    for ((pixel, hit), dirs) in pixels.iter().zip(directions.chunks_mut(n)) {
+        let frame = Frame::from_normal(hit.normal);
+        let random = Stream::new(1, *pixel as u64);
+        for (j, d) in dirs.iter_mut().enumerate() {
+            let j = j as u32;
+            let u = in_stratum((j % a, j / a), (a, b), random.pair(j as u64));
+            *d = frame.to_world(hemisphere(Weighting::Cosine, u));
         }
     }
-    stats
+    let generate = start.elapsed().as_secs_f64();
+    let mut stats = TraversalStats::default();
+    let mut distances = vec![0.0f32; directions.len()];
+    let mut cast = |stats: &mut TraversalStats| {
+        for ((_, hit), (dirs, out)) in pixels
+            .iter()
+            .zip(directions.chunks(n).zip(distances.chunks_mut(n)))
+        {
+            let origin = hit.spawn_origin(hit.normal);
+            let (origins, leaving) = ([origin; PACKET], [Some(hit.triangle); PACKET]);
+            let mut t = [0.0f32; PACKET];
+            if blocks {
+                for k in (0..b as usize).step_by(2) {
+                    for i in (0..a as usize).step_by(4) {
+                        let index: [usize; PACKET] =
+                            std::array::from_fn(|q| (k + q / 4) * a as usize + i + q % 4);
+                        let d = index.map(|j| dirs[j]);
+                        accel.hit_distances_counted(&origins, &d, &leaving, f32::INFINITY, &mut t, stats);
+                        for (q, j) in index.into_iter().enumerate() {
+                            out[j] = t[q];
+                        }
+                    }
+                }
+            } else {
+                for (d, out) in dirs.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+                    let k = d.len();
+                    accel.hit_distances_counted(&origins[..k], d, &leaving[..k], f32::INFINITY, out, stats);
+                }
+            }
+        }
+    };
+    cast(&mut stats);
+    let start = Instant::now();
+    cast(&mut TraversalStats::default());
+    let cast_seconds = start.elapsed().as_secs_f64();
+    let clamp = DistanceClamp::for_diagonal(1.0, None);
+    let start = Instant::now();
+    let mut h = 0.0f32;
+    for out in distances.chunks(n) {
+        let mut mean = HarmonicMean::default();
+        for &d in out {
+            mean.add(d, clamp);
+        }
+        h += mean.value();
+    }
+    std::hint::black_box(h);
+    let sum = start.elapsed().as_secs_f64();
+    let ns = |s: f64| s * 1e9 / directions.len() as f64;
+    (stats, [ns(generate), ns(cast_seconds), ns(sum)])
 }

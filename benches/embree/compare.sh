@@ -3,21 +3,41 @@
 # fast variants) and Embree 4 through Open3D (open3d-cpu from PyPI). Sets the peers up itself
 # (run as root on Debian/Ubuntu, or with the packages already installed).
 #
-#   benches/embree/compare.sh [CASES] [RUNS]
+#   benches/embree/compare.sh [CASES] [RUNS]                 # pure casting
+#   benches/embree/compare.sh --end-to-end [CASES] [RUNS]    # the whole gather
 #
 # CASES: space-separated SCENE:SIDE:N (default "cube:256:256 cube:64:4096 hall:256:256
-# sphere5m:256:64"); SCENE is a built-in, a file hmdist reads, or sphere5m (a closed
-# icosphere of 5,242,880 triangles seen from inside, written as OBJ + TOML); SIDE² pixels ×
-# N cosine gather rays of `hmdist render`. Each case writes the rays once (origins, the triangle they leave,
+# sphere5m:256:64"; end to end: "cube:256:256 cube:64:4096 hall:256:256"); SCENE is a
+# built-in, a file hmdist reads, or sphere5m (a closed icosphere of 5,242,880 triangles seen
+# from inside, written as OBJ + TOML); SIDE² pixels × N cosine gather rays of `hmdist render`.
+#
+# Pure casting: each case writes the rays once (origins, the triangle they leave,
 # directions), exports hmdist's exact triangles as OBJ, then runs every caster RUNS times
 # (default 5), interleaved, on all cores, and prints medians: build seconds, trace Mrays/s,
 # escaped rays, hmdist's throughput as a ratio to each peer's, and build + trace seconds
-# with the peer's total as a ratio to hmdist's (above 1: hmdist finishes first). Only the BVH build and the
-# casting loop are timed, for every caster. Timings drift ±10 %: compare within one run.
+# with the peer's total as a ratio to hmdist's (above 1: hmdist finishes first). Only the BVH
+# build and the casting loop are timed, for every caster (hmdist casts as `render` does:
+# packets of 4 × 2 neighbouring strata).
+#
+# End to end: what a user's stopwatch sees of the gather. `hmdist render --method gather`
+# (its `seconds.estimate`: directions, casting and sums, after the primary rays) against
+# embree_gather.c, which takes the same gather points (origin and normal per pixel), makes
+# the same stratified cosine directions with the same random numbers and frame, casts them
+# with rtcIntersect1 and sums 1/t per pixel, timed as a whole. Medians of RUNS interleaved
+# runs; ratio above 1: hmdist is faster. Timings drift ±10 %: compare within one run.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
+mode=cast
+if [ "${1:-}" = --end-to-end ]; then
+    mode=e2e
+    shift
+fi
 root="$(cd "$here/../.." && pwd)"
-cases="${1:-cube:256:256 cube:64:4096 hall:256:256 sphere5m:256:64}"
+if [ "$mode" = e2e ]; then
+    cases="${1:-cube:256:256 cube:64:4096 hall:256:256}"
+else
+    cases="${1:-cube:256:256 cube:64:4096 hall:256:256 sphere5m:256:64}"
+fi
 runs="${2:-5}"
 threads="$(nproc)"
 work="${HMDIST_COMPARE_DIR:-$(mktemp -d)}"
@@ -30,14 +50,53 @@ if [ ! -f /usr/include/embree3/rtcore.h ] || ! ldconfig -p | grep -q libusb-1.0;
     apt-get install -y -qq libembree-dev libusb-1.0-0 gcc >/dev/null
 fi
 gcc -O3 -march=native -o "$work/embree_cast" "$here/embree_cast.c" -lembree3 -lpthread -lm
+gcc -O3 -march=native -o "$work/embree_gather" "$here/embree_gather.c" -lembree3 -lpthread -lm
 venv="${HMDIST_COMPARE_VENV:-$work/venv}"
-if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c 'import open3d' 2>/dev/null; then
+if [ "$mode" = cast ] && { [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c 'import open3d' 2>/dev/null; }; then
     python3 -m venv "$venv"
     "$venv/bin/pip" install -q open3d-cpu numpy
 fi
 (cd "$root" && cargo build --release -q --example gather_rays --bin hmdist)
 hmdist="$root/target/release/hmdist"
 gather_rays="$root/target/release/examples/gather_rays"
+
+if [ "$mode" = e2e ]; then
+    for case in $cases; do
+        IFS=: read -r scene side n <<<"$case"
+        name="$(basename "$scene")"
+        points="$work/$name-$side.hmdp"
+        obj="$work/$name.obj"
+        [ -f "$points" ] || "$gather_rays" points "$scene" "$side" "$points"
+        [ -f "$obj" ] || "$hmdist" scene export "$scene" "$obj" >/dev/null
+        log="$work/$name-$side-$n-e2e.log"
+        : >"$log"
+        for _ in $(seq "$runs"); do
+            "$hmdist" render --quiet --scene "$scene" --size "${side}x$side" --rays "$n" --threads "$threads" \
+                --out "$work/e2e.exr" --json "$work/e2e.json" >/dev/null
+            python3 -c 'import json, sys; d = json.load(open(sys.argv[1])); s = d["seconds"]
+print("hmdist build_s %.3f gather_s %.3f mrays_per_s %.3f total_s %.3f kernel %s bvh %s" % (
+    s["accel_build"], s["estimate"], d["mrays_per_s"], s["total"], d["kernel"], d["bvh"]))' "$work/e2e.json" >>"$log"
+            "$work/embree_gather" "$obj" "$points" "$n" "$threads" robust >>"$log"
+            "$work/embree_gather" "$obj" "$points" "$n" "$threads" fast >>"$log"
+        done
+        python3 - "$log" "$case" "$threads" <<'PY'
+import statistics, sys
+log, case, threads = sys.argv[1], sys.argv[2], sys.argv[3]
+runs = {}
+for line in open(log):
+    words = line.split()
+    runs.setdefault(words[0], []).append(dict(zip(words[1::2], words[2::2])))
+med = lambda name, key: statistics.median(float(r[key]) for r in runs[name])
+ours = med("hmdist", "mrays_per_s")
+print(f"\n{case} end to end ({threads} threads, medians of {len(runs['hmdist'])} interleaved runs)")
+print(f"{'gather':<18} {'build_s':>8} {'gather_s':>9} {'Mrays/s':>8} {'hmdist ÷':>9}")
+for name in runs:
+    m = med(name, "mrays_per_s")
+    print(f"{name:<18} {med(name, 'build_s'):>8.2f} {med(name, 'gather_s'):>9.2f} {m:>8.2f} {ours / m:>9.2f}")
+PY
+    done
+    exit 0
+fi
 
 for case in $cases; do
     IFS=: read -r scene side n <<<"$case"

@@ -9,7 +9,7 @@
  * in chunks), with tnear = 1e-6 of the scene's bounding-box diagonal (SPEC's d_min; with
  * tnear = 0 Embree finds the surface a ray leaves at t = 0). Times the build (rtcCommitScene) and the casting loop only. Prints one line in
  * the format of gather_rays.rs. */
-#include <embree3/rtcore.h>
+#include "embree_scene.h"
 #include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
@@ -18,12 +18,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-
-static double now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
 
 static RTCScene scene;
 static unsigned char *rays_file;
@@ -85,35 +79,8 @@ int main(int argc, char **argv) {
     int threads = atoi(argv[3]);
     int robust = strcmp(argv[4], "robust") == 0;
 
-    /* The OBJ: v and f lines only (what hmdist exports). */
-    FILE *obj = fopen(argv[1], "r");
-    if (!obj) { perror(argv[1]); return 2; }
-    size_t nv = 0, nf = 0, cv = 1 << 20, cf = 1 << 20;
-    float *v = malloc(cv * 12);
-    unsigned *f = malloc(cf * 12);
-    char line[512];
-    while (fgets(line, sizeof line, obj)) {
-        if (line[0] == 'v' && line[1] == ' ') {
-            if (nv == cv) v = realloc(v, (cv *= 2) * 12);
-            sscanf(line + 2, "%f %f %f", &v[3 * nv], &v[3 * nv + 1], &v[3 * nv + 2]);
-            nv++;
-        } else if (line[0] == 'f' && line[1] == ' ') {
-            if (nf == cf) f = realloc(f, (cf *= 2) * 12);
-            unsigned a, b, c;
-            sscanf(line + 2, "%u %u %u", &a, &b, &c);
-            f[3 * nf] = a - 1; f[3 * nf + 1] = b - 1; f[3 * nf + 2] = c - 1;
-            nf++;
-        }
-    }
-    fclose(obj);
-    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t i = 0; i < nv; i++)
-        for (int k = 0; k < 3; k++) {
-            lo[k] = fminf(lo[k], v[3 * i + k]);
-            hi[k] = fmaxf(hi[k], v[3 * i + k]);
-        }
-    tnear = 1e-6f * sqrtf((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                          (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    double build;
+    scene = load_scene(argv[1], threads, robust, &tnear, &build);
 
     FILE *rf = fopen(argv[2], "rb");
     if (!rf) { perror(argv[2]); return 2; }
@@ -130,29 +97,11 @@ int main(int argc, char **argv) {
     memcpy(&rays_per_pixel, rays_file + 12, 4);
     record_bytes = 16 + 12 * (size_t)rays_per_pixel;
 
-    char config[64];
-    snprintf(config, sizeof config, "threads=%d", threads);
-    RTCDevice device = rtcNewDevice(config);
-    double start = now();
-    scene = rtcNewScene(device);
-    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
-    if (robust) rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
-    RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    rtcSetGeometryBuildQuality(geom, RTC_BUILD_QUALITY_HIGH);
-    float *vb = rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 12, nv);
-    memcpy(vb, v, nv * 12);
-    unsigned *ib = rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 12, nf);
-    memcpy(ib, f, nf * 12);
-    rtcCommitGeometry(geom);
-    rtcAttachGeometry(scene, geom);
-    rtcReleaseGeometry(geom);
-    rtcCommitScene(scene);
-    double build = now() - start;
 
     pthread_t workers[64];
     Tally tallies[64];
     memset(tallies, 0, sizeof tallies);
-    start = now();
+    double start = now();
     for (int i = 0; i < threads; i++) pthread_create(&workers[i], NULL, cast, &tallies[i]);
     uint64_t escaped = 0;
     double inverse_sum = 0;
