@@ -17,9 +17,14 @@
 //! - **The same bits on every CPU path**: the kernels (scalar, AVX2, AVX-512) return the same
 //!   hit distances bit for bit, and so the same images; `HMDIST_KERNEL` forces one.
 //!
+//! - **The same answer whatever the visit order**: among hits at equal `t` the lowest triangle
+//!   index wins, and nothing that could hold such a tie is culled (`traverse.rs`), so BVH
+//!   presets, packets and the GPU agree bit for bit.
+//!
 //! The interface is [`RayCaster`]: no per-ray allocation and no dynamic dispatch; estimators
 //! are generic over it. [`Accel`] is the implementation: an 8-wide BVH (`wide.rs`) traversed
-//! nearest child first (`traverse.rs`) by SIMD kernels chosen at run time (`kernel/`).
+//! nearest child first (`traverse.rs`) by SIMD kernels chosen at run time (`kernel/`), one ray
+//! at a time or up to [`PACKET`] rays together (`packet.rs`, [`RayCaster::hit_distances`]).
 //! Distances are in scene units; directions must be unit length for `t` to be a distance.
 
 mod bvh;
