@@ -25,7 +25,7 @@ use hmdist::accel::{Accel, BuildQuality, Kernel, TraversalStats, PACKET};
 use hmdist::estimators::{DistanceClamp, EstimateContext, GBuffer, Gather, HarmonicMean};
 use hmdist::progress::Silent;
 use hmdist::render::primary_hits;
-use hmdist::sampling::{hemisphere, in_stratum, strata, Frame, Stream, Weighting};
+use hmdist::sampling::{strata, Weighting};
 use hmdist::scene::Scene;
 
 fn list(name: &str, default: &str) -> Vec<String> {
@@ -203,14 +203,11 @@ fn traversal(accel: &Accel, gbuffer: &GBuffer, rays: u32) -> (TraversalStats, [f
     let n = rays as usize;
     let pixels: Vec<_> = stats_pixels(gbuffer).collect();
     let mut directions = vec![Vec3::ZERO; pixels.len() * n];
+    let gather = Gather::new(rays, Weighting::Cosine).unwrap();
     let start = Instant::now();
     for ((pixel, hit), dirs) in pixels.iter().zip(directions.chunks_mut(n)) {
-        let frame = Frame::from_normal(hit.normal);
-        let random = Stream::new(1, *pixel as u64);
-        for (j, d) in dirs.iter_mut().enumerate() {
-            let j = j as u32;
-            let u = in_stratum((j % a, j / a), (a, b), random.pair(j as u64));
-            *d = frame.to_world(hemisphere(Weighting::Cosine, u));
+        for (d, w) in dirs.iter_mut().zip(gather.rays(hit, 1, *pixel as u64).1) {
+            *d = w;
         }
     }
     let generate = start.elapsed().as_secs_f64();

@@ -208,17 +208,11 @@ impl Accel {
                 move |block: u32, lane: usize| self.may_take_within_error_hit(leaving, block, lane)
             });
             let mut searches: [Search; PACKET] = std::array::from_fn(|i| Search::new(t_max, &accept[i]));
-            let needed = stack_size(self.bvh.depth);
-            let mut inline = [MaybeUninit::<Entry>::uninit(); INLINE_STACK];
-            let mut inline_packet = [MaybeUninit::<PacketEntry>::uninit(); INLINE_STACK];
-            let (mut heap, mut heap_packet) = (Vec::new(), Vec::new());
-            let (stack, packet_stack) = if needed <= INLINE_STACK {
-                (&mut inline[..], &mut inline_packet[..])
-            } else {
-                heap.resize(needed, MaybeUninit::uninit());
-                heap_packet.resize(needed, MaybeUninit::uninit());
-                (&mut heap[..], &mut heap_packet[..])
-            };
+            let (mut inline, mut heap) = ([MaybeUninit::<Entry>::uninit(); INLINE_STACK], Vec::new());
+            let (mut inline_packet, mut heap_packet) =
+                ([MaybeUninit::<PacketEntry>::uninit(); INLINE_STACK], Vec::new());
+            let stack = self.stack(&mut inline, &mut heap);
+            let packet_stack = self.stack(&mut inline_packet, &mut heap_packet);
             let (bvh, searches) = (&self.bvh, &mut searches[..n]);
             // SAFETY: `with_kernel` and `Kernel::from_env` only choose kernels the CPU has.
             unsafe {
@@ -245,6 +239,23 @@ impl Accel {
         }
     }
 
+    /// A traversal stack of [`stack_size`] entries for this BVH: `inline` (on the thread's
+    /// stack) where it is deep enough, else `heap`, grown to size.
+    #[inline(always)]
+    fn stack<'s, T: Copy>(
+        &self,
+        inline: &'s mut [MaybeUninit<T>; INLINE_STACK],
+        heap: &'s mut Vec<MaybeUninit<T>>,
+    ) -> &'s mut [MaybeUninit<T>] {
+        let needed = stack_size(self.bvh.depth);
+        if needed <= INLINE_STACK {
+            &mut inline[..]
+        } else {
+            heap.resize(needed, MaybeUninit::uninit());
+            &mut heap[..]
+        }
+    }
+
     /// The closest hit along `ray`, with the kernel chosen at build; `None` for a ray with a
     /// NaN or infinite component, which would pass every box test (`maxps`/`minps` drop a NaN)
     /// and reach empty slots.
@@ -260,15 +271,8 @@ impl Accel {
             return None;
         }
         let accept = |block: u32, lane: usize| self.may_take_within_error_hit(leaving, block, lane);
-        let needed = stack_size(self.bvh.depth);
-        let mut inline = [MaybeUninit::<Entry>::uninit(); INLINE_STACK];
-        let mut heap = Vec::new();
-        let stack = if needed <= INLINE_STACK {
-            &mut inline[..]
-        } else {
-            heap.resize(needed, MaybeUninit::uninit());
-            &mut heap[..]
-        };
+        let (mut inline, mut heap) = ([MaybeUninit::<Entry>::uninit(); INLINE_STACK], Vec::new());
+        let stack = self.stack(&mut inline, &mut heap);
         match self.kernel {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: `with_kernel` and `Kernel::from_env` only choose kernels the CPU has.

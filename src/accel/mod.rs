@@ -79,8 +79,8 @@ pub trait RayCaster: Sync {
     /// [`RayCaster::hit_distance`] of up to [`PACKET`] rays at once: `out[i]` is exactly what
     /// `hit_distance(origins[i], directions[i], t_max, leaving[i])` gives, bit for bit.
     /// `origins`, `directions` and `leaving` have one length, at most [`PACKET`], and `out` at
-    /// least that. Rays from nearby points in nearby directions (the same stratum of
-    /// neighbouring pixels) are traversed together, sharing each node's visit.
+    /// least that. Rays from nearby points in nearby directions (a point's neighbouring
+    /// strata) are traversed together, sharing each node's visit.
     fn hit_distances(
         &self,
         origins: &[Vec3],

@@ -47,16 +47,6 @@ pub(crate) struct PacketEntry {
     rays: u32,
 }
 
-impl Default for PacketEntry {
-    fn default() -> Self {
-        PacketEntry {
-            near: [0.0; PACKET],
-            reference: EMPTY,
-            rays: 0,
-        }
-    }
-}
-
 /// The packet traversal with AVX2 enabled: `rays[r]`'s hits go to `searches[r]`.
 ///
 /// # Safety
@@ -198,15 +188,8 @@ unsafe fn traverse<C: Counter>(
         return;
     }
     'visit: loop {
-        if reference & LEAF != 0 {
-            let mut m = active;
-            while m != 0 {
-                let r = m.trailing_zeros() as usize;
-                m &= m - 1;
-                searches[r].leaf::<Avx2, C>(bvh, &rays[r], reference, counter);
-                best[r] = searches[r].best_t;
-            }
-        } else if active.count_ones() < SINGLE_BELOW {
+        if reference & LEAF != 0 || active.count_ones() < SINGLE_BELOW {
+            // A leaf (tested ray by ray) or a subtree left to few rays: one ray at a time.
             let mut m = active;
             while m != 0 {
                 let r = m.trailing_zeros() as usize;

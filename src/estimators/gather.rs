@@ -25,7 +25,7 @@ use crate::accel::{Hit, RayCaster, PACKET};
 use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::report::{Details, DeviceDetails, GatherParameters, Parameters};
-use crate::sampling::{hemisphere, in_stratum, random_pair, strata, stratified, Frame, Stream, Weighting};
+use crate::sampling::{hemisphere, in_stratum, strata, Frame, Stream, Weighting};
 
 /// Default gather rays per pixel for `hmdist render`: an 8 × 8 stratified grid, a clean
 /// picture of `cube` at 1024² in about 10 s on 2 cores. The paper's reference uses 65,536;
@@ -364,10 +364,13 @@ pub(crate) fn round_directions(
 ) -> impl Iterator<Item = Vec3> {
     let grid = strata(n);
     let first = round as u64 * n as u64;
-    (0..n).map(move |j| {
-        let u = stratified(j, grid, random_pair(seed, key, first + j as u64));
-        hemisphere(weighting, u)
-    })
+    let random = Stream::new(seed, key);
+    // Ray j = k·a + i is stratum (i, k): rows of the grid in turn (`stratified`'s order,
+    // without its division per ray).
+    (0..grid.1)
+        .flat_map(move |k| (0..grid.0).map(move |i| (i, k)))
+        .zip(first..)
+        .map(move |(stratum, counter)| hemisphere(weighting, in_stratum(stratum, grid, random.pair(counter))))
 }
 
 /// How a round's rays are grouped into packets for [`RayCaster::hit_distances`]: spans of
@@ -393,24 +396,16 @@ pub(crate) fn packets((a, b): (u32, u32)) -> Packets {
     }
 }
 
-/// A packet: up to [`PACKET`] ray indices and their strata `(i, k)`.
+/// A packet: up to [`PACKET`] ray indices.
 pub(crate) struct Packet {
     index: [u32; PACKET],
-    stratum: [(u32, u32); PACKET],
     len: usize,
 }
 
 impl Packet {
-    /// The rays: index and stratum.
-    fn iter(&self) -> impl Iterator<Item = (u32, (u32, u32))> + '_ {
-        self.index[..self.len]
-            .iter()
-            .copied()
-            .zip(self.stratum[..self.len].iter().copied())
-    }
-
-    fn len(&self) -> usize {
-        self.len
+    /// The rays' indices.
+    fn rays(&self) -> &[u32] {
+        &self.index[..self.len]
     }
 }
 
@@ -422,18 +417,12 @@ impl Packets {
         (0..packets).map(move |p| {
             if blocks {
                 // Block p covers columns 4p .. 4p + 3 of the span's two rows.
-                let row = base / a;
-                let stratum = std::array::from_fn(|q| (4 * p + (q % 4) as u32, row + (q / 4) as u32));
-                Packet {
-                    index: stratum.map(|(i, k)| k * a + i),
-                    stratum,
-                    len: PACKET,
-                }
+                let index = std::array::from_fn(|q| base + (q / 4) as u32 * a + 4 * p + (q % 4) as u32);
+                Packet { index, len: PACKET }
             } else {
-                let index: [u32; PACKET] = std::array::from_fn(|q| base + q as u32);
+                let index = std::array::from_fn(|q| base + q as u32);
                 Packet {
                     index,
-                    stratum: index.map(|j| (j % a, j / a)),
                     len: count as usize,
                 }
             }
@@ -507,33 +496,33 @@ impl PointGather {
         clamp: DistanceClamp,
         progress: &dyn Progress,
     ) {
-        let grid = strata(n);
-        let random = Stream::new(seed, key);
-        let first = self.rounds as u64 * n as u64;
+        let grouping = packets(strata(n));
+        let mut directions = round_directions(self.weighting, seed, key, self.rounds, n);
         let mut inverse_sum = 0.0f64;
         let poll = crate::interrupt::POLL_RAYS as u64;
         let mut pending = 0u64;
         // Distances and local directions of the rays of one span of ray indices.
-        let span = packets(grid).span as usize;
+        let span = grouping.span as usize;
         let (mut distances, mut local) = (vec![0.0f32; span], vec![Vec3::ZERO; span]);
         let (origins, leaving) = ([start.origin; PACKET], [start.leaving; PACKET]);
         for (base, count) in (0..n)
             .step_by(span)
             .map(|base| (base, span.min((n - base) as usize)))
         {
-            for packet in packets(grid).within(base, count as u32) {
-                let mut directions = [Vec3::ZERO; PACKET];
-                for (q, (j, stratum)) in packet.iter().enumerate() {
-                    let u = in_stratum(stratum, grid, random.pair(first + j as u64));
-                    let w = hemisphere(self.weighting, u);
-                    local[(j - base) as usize] = w;
-                    directions[q] = start.frame.to_world(w);
+            for (w, next) in local[..count].iter_mut().zip(&mut directions) {
+                *w = next;
+            }
+            for packet in grouping.within(base, count as u32) {
+                let rays = packet.rays();
+                let mut world = [Vec3::ZERO; PACKET];
+                for (world, &j) in world.iter_mut().zip(rays) {
+                    *world = start.frame.to_world(local[(j - base) as usize]);
                 }
                 let mut t = [0.0f32; PACKET];
-                let k = packet.len();
-                accel.hit_distances(&origins[..k], &directions[..k], &leaving[..k], clamp.max, &mut t);
-                for (q, (j, _)) in packet.iter().enumerate() {
-                    distances[(j - base) as usize] = t[q];
+                let k = rays.len();
+                accel.hit_distances(&origins[..k], &world[..k], &leaving[..k], clamp.max, &mut t);
+                for (&t, &j) in t.iter().zip(rays) {
+                    distances[(j - base) as usize] = t;
                 }
             }
             for (&d, w) in distances[..count].iter().zip(&local[..count]) {
