@@ -216,3 +216,96 @@ fn an_experiment_spread_over_shards_renders_each_image_once_and_writes_the_one_m
     let csv = |out: &Path| std::fs::read_to_string(out.join("table1.csv")).unwrap();
     assert_eq!(csv(&spread), csv(&one));
 }
+
+/// Counts the images a run renders (the runner advances its progress once per image).
+#[derive(Default)]
+struct Renders(std::sync::atomic::AtomicU64);
+
+impl hmdist::progress::Progress for Renders {
+    fn start(&self, _: &str, _: u64) {}
+    fn advance(&self, steps: u64) {
+        self.0.fetch_add(steps, std::sync::atomic::Ordering::Relaxed);
+    }
+    fn finish(&self) {}
+}
+
+/// The cache's images: the stems of its JSON reports (written last, once the EXR is there).
+fn cached_stems(out: &Path) -> std::collections::BTreeSet<String> {
+    cache_times(out)
+        .into_keys()
+        .filter_map(|n| n.strip_suffix(".json").map(String::from))
+        .collect()
+}
+
+#[test]
+fn a_plan_lists_each_image_once_and_exactly_those_a_run_then_renders_once_each() {
+    let dir = Scratch::new("experiments-plan");
+    let out = dir.join("out");
+    let planned = |out: &Path| {
+        let mut runner = Runner::new("slab", Preset::Quick, out, &Silent)
+            .unwrap()
+            .with_plan()
+            .unwrap();
+        runner.run("all").unwrap();
+        let plan = runner.planned.clone().unwrap();
+        let written: hmdist::experiments::Plan =
+            serde_json::from_str(&std::fs::read_to_string(out.join("plan.json")).unwrap()).unwrap();
+        assert_eq!(written.items.len(), plan.items.len());
+        plan
+    };
+
+    let plan = planned(&out);
+    let stems: Vec<String> = plan.items.iter().filter_map(|i| i.cache.clone()).collect();
+    let distinct: std::collections::BTreeSet<String> = stems.iter().cloned().collect();
+    assert_eq!(stems.len(), distinct.len(), "each image once");
+    assert!(plan.items.iter().all(|i| !i.cached), "nothing cached yet");
+    assert!(plan.total_seconds > 0.0);
+    // Images that several experiments share are listed under the first, with the others.
+    let reference = plan
+        .items
+        .iter()
+        .find(|i| i.what.starts_with("gather, N = 16384"))
+        .expect("the reference is planned");
+    for other in ["table2", "fig9", "table3", "fig10", "fig16_17", "adaptive"] {
+        assert!(
+            reference.also_needed_by.iter().any(|e| e == other),
+            "{other} uses the reference: {:?}",
+            reference.also_needed_by
+        );
+    }
+    // The plan writes nothing but itself.
+    let mut files: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    files.sort();
+    assert_eq!(files, ["cache", "plan.csv", "plan.json", "plan.md"]);
+    assert!(cached_stems(&out).is_empty(), "no image cached by a plan");
+
+    let renders = Renders::default();
+    let mut runner = Runner::new("slab", Preset::Quick, &out, &renders).unwrap();
+    runner.run("all").unwrap();
+    assert_eq!(cached_stems(&out), distinct, "the run renders what the plan listed");
+    assert_eq!(
+        renders.0.load(std::sync::atomic::Ordering::Relaxed),
+        distinct.len() as u64,
+        "each image rendered once"
+    );
+    let comparison = std::fs::read_to_string(out.join("plan_vs_actual.csv")).unwrap();
+    assert_eq!(comparison.lines().count(), 1 + 9, "{comparison}");
+
+    let again = planned(&out);
+    assert!(
+        again.items.iter().filter(|i| i.cache.is_some()).all(|i| i.cached),
+        "after the run, every image is cached"
+    );
+    let images: Vec<String> = again.items.iter().filter_map(|i| i.cache.clone()).collect();
+    assert_eq!(images, stems);
+    let work: f64 = again
+        .items
+        .iter()
+        .filter(|i| i.cache.is_none())
+        .map(|i| i.seconds)
+        .sum();
+    assert_eq!(again.total_seconds, work, "only the work that is not an image is left");
+}

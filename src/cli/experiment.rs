@@ -33,6 +33,12 @@ pub struct ExperimentArgs {
     /// of the image cache's key.
     #[arg(long, value_enum, default_value_t = Backend::Auto)]
     backend: Backend,
+    /// Print what the run will cost and render nothing: every image it needs (each once),
+    /// which are cached, and each one's seconds, estimated from a calibration render of a few
+    /// rows; written to OUT/plan.md, plan.csv and plan.json. A later run's report puts the
+    /// estimates beside the seconds taken.
+    #[arg(long, conflicts_with = "shard")]
+    plan: bool,
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
@@ -55,7 +61,18 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
     if let Some(shard) = args.shard {
         runner = runner.with_shard(shard)?;
     }
+    if args.plan {
+        runner = runner.with_plan()?;
+    }
     runner.run(&args.name)?;
+    if let Some(plan) = &runner.planned {
+        if !args.quiet {
+            println!("{}", plan.items_table().markdown());
+            println!("{}", plan.summary_table().markdown());
+            println!("plan: {}", args.out.join("plan.md").display());
+        }
+        return Ok(());
+    }
     if let Some((rendered, others)) = runner.shard_counts() {
         if !args.quiet {
             println!(
@@ -77,6 +94,9 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
                 println!("- {note}");
             }
             println!();
+        }
+        if let Some(table) = runner.plan_against_run() {
+            println!("{}", table.markdown());
         }
         println!("report: {}", args.out.join("index.html").display());
     }

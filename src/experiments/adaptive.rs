@@ -8,12 +8,10 @@ use super::plot::{log_log, Series};
 use super::rays::reference;
 use super::{Runner, Section, Table};
 use crate::error::Result;
-use crate::estimators::{registry, Aov, MethodConfig};
+use crate::estimators::{Aov, MethodConfig};
 use crate::image::picture::{encode_png, false_colour};
 use crate::image::{write_atomically, HmdImage};
 use crate::metrics::f_diff;
-use crate::progress::Silent;
-use crate::render::{render, RenderOptions};
 
 /// Adaptive's tolerances, loosest first.
 pub const TOLERANCES: [f32; 5] = [0.2, 0.1, 0.05, 0.025, 0.0125];
@@ -115,7 +113,9 @@ pub fn adaptive(runner: &Runner) -> Result<Section> {
     let (mut savings, mut p95_savings) = (vec![], vec![]);
     let cell = |v: Option<f64>, f: fn(f64) -> String| v.map_or("outside the sweep".into(), f);
     for tolerance in TOLERANCES {
-        let (image, report) = runner.method_image("adaptive", &adaptive_config(runner, tolerance), 1)?;
+        // With the rays AOV, so that the picture of rays per pixel comes from the cache.
+        let config = adaptive_config(runner, tolerance);
+        let (image, report, _) = runner.method_image_with("adaptive", &config, 1, &[Aov::Rays])?;
         let surface = (report.width * report.height) as usize - report.background_pixels;
         let point = Point {
             rays: mean_rays(report.rays_cast, surface),
@@ -183,20 +183,15 @@ pub fn adaptive(runner: &Runner) -> Result<Section> {
     })
 }
 
-/// A false-colour picture of the rays adaptive casts per pixel at the middle tolerance.
+/// A false-colour picture of the rays adaptive casts per pixel at the middle tolerance (its
+/// image, with the rays AOV, is one of the study's: cached).
 fn rays_picture(runner: &Runner) -> Result<std::path::PathBuf> {
     let tolerance = TOLERANCES[TOLERANCES.len() / 2];
-    let estimator = registry::build("adaptive", &adaptive_config(runner, tolerance))?;
+    let config = adaptive_config(runner, tolerance);
+    let (_, _, aovs) = runner.method_image_with("adaptive", &config, 1, &[Aov::Rays])?;
     let size = runner.params.size;
-    let options = RenderOptions {
-        width: size,
-        height: size,
-        aovs: vec![Aov::Rays],
-        ..RenderOptions::default()
-    };
-    let rendered = render(&runner.scene, estimator.as_ref(), &options, &Silent)?;
     let label = format!("rays, tolerance {tolerance}");
-    let picture = false_colour(&rendered.aovs[0].data, size, size, &label);
+    let picture = false_colour(&aovs[0].data, size, size, &label);
     let path = runner.out.join("adaptive_rays.png");
     write_atomically(&path, &encode_png(&picture, &path)?)?;
     Ok(path)

@@ -17,15 +17,18 @@ mod adaptive;
 mod grid;
 pub mod paper;
 mod photons;
+pub mod plan;
 pub mod plot;
 mod rays;
 mod report;
 pub mod table;
 
+use std::cell::RefCell;
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use crate::error::{Error, Result};
-use crate::estimators::{registry, Backend, Estimator, MethodConfig};
+use crate::estimators::{registry, Aov, Backend, Estimator, MethodConfig};
 use crate::image::{exr, write_atomically, HmdImage};
 use crate::progress::{Progress, Silent};
 use crate::render::{render, RenderOptions};
@@ -33,6 +36,7 @@ use crate::report::RenderReport;
 use crate::scene::{stable_hash, Scene};
 use crate::shard::Shard;
 use std::cell::Cell;
+pub use plan::Plan;
 pub use table::Table;
 
 /// One experiment: its name, what it shows, how many images it may render, and the code.
@@ -199,6 +203,7 @@ impl Preset {
 }
 
 /// What one experiment produced, for the report.
+#[derive(Default)]
 pub struct Section {
     /// The experiment's name.
     pub name: String,
@@ -232,6 +237,23 @@ pub struct Runner<'a> {
     shard: Option<ShardRun>,
     /// Where gather and the cube map run (every image's configuration gets it).
     backend: Backend,
+    /// Set for `experiment --plan`: calibrate instead of render.
+    plan: Option<PlanRun>,
+    /// The plan a `--plan` run made.
+    pub planned: Option<Plan>,
+    /// Wall seconds of each experiment this run ran, in order.
+    pub timings: Vec<(String, f64)>,
+}
+
+/// A plan in the making ([`plan`]): every image the experiments ask for is looked up in the
+/// cache and, where it is not there, calibrated; the experiments' tables and pictures go to a
+/// scratch folder, removed at the end, and the plan to `out`.
+struct PlanRun {
+    out: PathBuf,
+    experiment: Cell<&'static str>,
+    items: RefCell<Vec<plan::PlanItem>>,
+    calibration_seconds: Cell<f64>,
+    calibration_failed: Cell<bool>,
 }
 
 /// A shard's share of an experiment's images: request `i` (in the order the experiment asks,
@@ -269,7 +291,46 @@ impl<'a> Runner<'a> {
             cache: out.join("cache"),
             shard: None,
             backend: Backend::Auto,
+            plan: None,
+            planned: None,
+            timings: vec![],
         })
+    }
+
+    /// This runner making a plan ([`plan`]) instead of running: `run` calibrates every image
+    /// that is not cached, renders nothing whole and writes `plan.json`, `plan.md` and
+    /// `plan.csv` into the output folder, and nothing else.
+    pub fn with_plan(mut self) -> Result<Self> {
+        let scratch = self.out.join(".plan");
+        std::fs::create_dir_all(&scratch).map_err(|e| Error::io(&scratch, "create the folder", e))?;
+        let out = std::mem::replace(&mut self.out, scratch);
+        self.plan = Some(PlanRun {
+            out,
+            experiment: Cell::new(""),
+            items: RefCell::new(vec![]),
+            calibration_seconds: Cell::new(0.0),
+            calibration_failed: Cell::new(false),
+        });
+        Ok(self)
+    }
+
+    /// Whether this run only makes a plan.
+    pub fn planning(&self) -> bool {
+        self.plan.is_some()
+    }
+
+    /// For a plan: work of the current experiment that is not an image (`what`, of size
+    /// `work`), estimated at `seconds`.
+    pub fn plan_work(&self, what: String, work: String, seconds: f64) {
+        if let Some(plan) = &self.plan {
+            plan.items.borrow_mut().push(plan::PlanItem {
+                experiment: plan.experiment.get().into(),
+                what,
+                work,
+                seconds,
+                ..plan::PlanItem::default()
+            });
+        }
     }
 
     /// This runner with gather and the cube map on `backend` (default: auto). The backend is
@@ -302,26 +363,85 @@ impl<'a> Runner<'a> {
     }
 
     /// Runs experiment `name` (or every one for `all`), then rewrites the report; a shard
-    /// only renders its share of the images.
+    /// only renders its share of the images, and a plan only calibrates (see [`plan`]).
     pub fn run(&mut self, name: &str) -> Result<()> {
-        for experiment in select(name)? {
+        let experiments = select(name)?;
+        for experiment in &experiments {
+            if let Some(plan) = &self.plan {
+                plan.experiment.set(experiment.name);
+            }
             self.progress
                 .start(experiment.name, (experiment.images)(&self.params));
+            let start = Instant::now();
             let result = (experiment.run)(self);
             self.progress.finish();
-            match (result, &self.shard) {
-                (Ok(section), None) => self.sections.push(section),
-                (Ok(_), Some(_)) => {}
+            let seconds = start.elapsed().as_secs_f64();
+            match (result, &self.shard, &self.plan) {
+                (Ok(section), None, None) => {
+                    self.sections.push(section);
+                    self.timings.push((experiment.name.into(), seconds));
+                }
+                (Ok(_), _, _) => {}
                 // The analysis of stand-in images can fail (nothing to plot); rendering
                 // cannot, unnoticed.
-                (Err(_), Some(s)) if !s.render_failed.get() && s.stand_ins.get() > 0 => {}
-                (Err(e), _) => return Err(e),
+                (Err(_), Some(s), _) if !s.render_failed.get() && s.stand_ins.get() > 0 => {}
+                (Err(_), _, Some(p)) if !p.calibration_failed.get() && !crate::interrupt::requested() => {}
+                (Err(e), _, _) => return Err(e),
             }
         }
-        match &self.shard {
-            Some(_) => std::fs::remove_dir_all(&self.out).map_err(|e| Error::io(&self.out, "remove", e)),
-            None => report::write(self),
+        if let Some(plan) = &self.plan {
+            let names: Vec<&str> = experiments.iter().map(|e| e.name).collect();
+            self.planned = Some(self.write_plan(plan, &names)?);
         }
+        match (&self.shard, &self.plan) {
+            (Some(_), _) | (_, Some(_)) => {
+                std::fs::remove_dir_all(&self.out).map_err(|e| Error::io(&self.out, "remove", e))
+            }
+            (None, None) => report::write(self),
+        }
+    }
+
+    /// The plan `plan` gathered, totalled per experiment in `order` and written into its
+    /// folder.
+    fn write_plan(&self, plan: &PlanRun, order: &[&str]) -> Result<Plan> {
+        let mut made = Plan {
+            scene: self.scene.name.clone(),
+            preset: self.preset.name().into(),
+            size: self.params.size,
+            backend: format!("{:?}", self.backend).to_lowercase(),
+            machine: plan::Machine::this(),
+            calibration_seconds: plan.calibration_seconds.get(),
+            items: plan.items.borrow().clone(),
+            ..Plan::default()
+        };
+        made.total(order);
+        let json = serde_json::to_string_pretty(&made).expect("a plan serialises");
+        write_atomically(&plan.out.join("plan.json"), json.as_bytes())?;
+        let markdown = format!(
+            "{}\n{}",
+            made.summary_table().markdown(),
+            made.items_table().markdown()
+        );
+        write_atomically(&plan.out.join("plan.md"), markdown.as_bytes())?;
+        write_atomically(&plan.out.join("plan.csv"), made.items_table().csv().as_bytes())?;
+        Ok(made)
+    }
+
+    /// The plan an earlier `--plan` wrote into this runner's folder for the same scene,
+    /// preset and size, if any.
+    pub fn earlier_plan(&self) -> Option<Plan> {
+        let text = std::fs::read_to_string(self.out.join("plan.json")).ok()?;
+        let plan: Plan = serde_json::from_str(&text).ok()?;
+        let same = plan.scene == self.scene.name
+            && plan.preset == self.preset.name()
+            && plan.size == self.params.size;
+        same.then_some(plan)
+    }
+
+    /// The earlier plan's estimates beside this run's seconds, per experiment: see
+    /// [`plan::comparison`].
+    pub fn plan_against_run(&self) -> Option<Table> {
+        plan::comparison(&self.earlier_plan()?, &self.timings)
     }
 
     /// The image method `method` (a registry name) renders with `config` and `seed`: see
@@ -332,25 +452,53 @@ impl<'a> Runner<'a> {
         config: &MethodConfig,
         seed: u64,
     ) -> Result<(HmdImage, RenderReport)> {
+        let (image, report, _) = self.method_image_with(method, config, seed, &[])?;
+        Ok((image, report))
+    }
+
+    /// [`Runner::method_image`] with `aovs` measured beside H, cached with it, returned in
+    /// that order.
+    pub fn method_image_with(
+        &self,
+        method: &str,
+        config: &MethodConfig,
+        seed: u64,
+        aovs: &[Aov],
+    ) -> Result<(HmdImage, RenderReport, Vec<HmdImage>)> {
         let config = MethodConfig {
             backend: self.backend,
             ..config.clone()
         };
-        self.image(registry::build(method, &config)?.as_ref(), seed)
+        self.image_with(registry::build(method, &config)?.as_ref(), seed, aovs)
     }
 
     /// The image `estimator` renders at the preset's size with `seed`, from the cache when
     /// an earlier run made it.
     pub fn image(&self, estimator: &dyn Estimator, seed: u64) -> Result<(HmdImage, RenderReport)> {
+        let (image, report, _) = self.image_with(estimator, seed, &[])?;
+        Ok((image, report))
+    }
+
+    /// [`Runner::image`] with `aovs`: they are part of the cache key, and stored as channels
+    /// of the cached EXR.
+    fn image_with(
+        &self,
+        estimator: &dyn Estimator,
+        seed: u64,
+        aovs: &[Aov],
+    ) -> Result<(HmdImage, RenderReport, Vec<HmdImage>)> {
         crate::interrupt::check()?;
         let size = self.params.size;
         let parameters = serde_json::to_string(&estimator.parameters()).expect("parameters serialise");
-        let key = format!(
+        let mut key = format!(
             "{}|{}|{parameters}|{size}x{size}|{seed}|{:?}",
             self.scene_key,
             estimator.method(),
             self.backend,
         );
+        for aov in aovs {
+            key += &format!("|{}", aov.name());
+        }
         let stem = format!("{}-{:016x}", estimator.method(), stable_hash(key.as_bytes()));
         let (exr_path, json_path) = (
             self.cache.join(format!("{stem}.exr")),
@@ -361,29 +509,23 @@ impl<'a> Runner<'a> {
             s.requests.set(i + 1);
             (s, i % s.shard.count as u64 == s.shard.index as u64)
         });
-        if let (Ok(image), Ok(text)) = (exr::read(&exr_path), std::fs::read_to_string(&json_path)) {
-            if let Ok(report) = serde_json::from_str::<RenderReport>(&text) {
-                // The version is in the key; a report that says otherwise was not ours.
-                if report.hmdist_version == env!("CARGO_PKG_VERSION") {
-                    return Ok((image, report));
-                }
-            }
+        let cached = read_cached(&exr_path, &json_path, aovs);
+        if let Some(plan) = &self.plan {
+            return self.plan_image(plan, estimator, seed, aovs, stem, cached);
+        }
+        if let Some(cached) = cached {
+            return Ok(cached);
         }
         if let Some((s, false)) = request {
             // Another shard's image: a stand-in of the right size.
             s.stand_ins.set(s.stand_ins.get() + 1);
-            let pixels = (size * size) as usize;
-            let report = RenderReport {
-                width: size,
-                height: size,
-                ..RenderReport::default()
-            };
-            return Ok((HmdImage::new(size, size, vec![1.0; pixels]), report));
+            return Ok(self.stand_in(aovs));
         }
         let options = RenderOptions {
             width: size,
             height: size,
             seed,
+            aovs: aovs.to_vec(),
             ..RenderOptions::default()
         };
         let rendered = render(&self.scene, estimator, &options, &Silent).inspect_err(|_| {
@@ -394,10 +536,108 @@ impl<'a> Runner<'a> {
         if let Some((s, _)) = request {
             s.rendered.set(s.rendered.get() + 1);
         }
-        exr::write(&rendered.image, &exr_path)?;
+        write_atomically(&exr_path, &exr::encode(&rendered.image, &rendered.aovs, &exr_path)?)?;
         // The JSON last: an image counts as cached only once both files are in place.
         write_atomically(&json_path, rendered.report.to_json().as_bytes())?;
         self.progress.advance(1);
-        Ok((rendered.image, rendered.report))
+        let channels = rendered
+            .aovs
+            .into_iter()
+            .map(|a| HmdImage::new(size, size, a.data))
+            .collect();
+        Ok((rendered.image, rendered.report, channels))
     }
+
+    /// An image of the preset's size standing in for one this run does not render.
+    fn stand_in(&self, aovs: &[Aov]) -> (HmdImage, RenderReport, Vec<HmdImage>) {
+        let size = self.params.size;
+        let image = HmdImage::new(size, size, vec![1.0; (size * size) as usize]);
+        let report = RenderReport {
+            width: size,
+            height: size,
+            ..RenderReport::default()
+        };
+        (image.clone(), report, vec![image; aovs.len()])
+    }
+
+    /// For a plan: records the image (once, however many experiments ask for it) and, when it
+    /// is not `cached`, calibrates it; returns the cached image or a stand-in.
+    fn plan_image(
+        &self,
+        plan: &PlanRun,
+        estimator: &dyn Estimator,
+        seed: u64,
+        aovs: &[Aov],
+        stem: String,
+        cached: Option<(HmdImage, RenderReport, Vec<HmdImage>)>,
+    ) -> Result<(HmdImage, RenderReport, Vec<HmdImage>)> {
+        let experiment = plan.experiment.get();
+        let mut items = plan.items.borrow_mut();
+        if let Some(item) = items.iter_mut().find(|i| i.cache.as_ref() == Some(&stem)) {
+            if item.experiment != experiment && !item.also_needed_by.iter().any(|e| e == experiment) {
+                item.also_needed_by.push(experiment.into());
+            }
+            drop(items);
+            return Ok(cached.unwrap_or_else(|| self.stand_in(aovs)));
+        }
+        let size = self.params.size;
+        let (what, work) = plan::describe(
+            estimator.method(),
+            &estimator.parameters(),
+            seed,
+            size as u64 * size as u64,
+        );
+        let seconds = match &cached {
+            Some(_) => 0.0,
+            None => {
+                let (shard, scale) = plan::calibration_shard(size);
+                let options = RenderOptions {
+                    width: size,
+                    height: size,
+                    seed,
+                    aovs: aovs.to_vec(),
+                    shard: Some(shard),
+                    ..RenderOptions::default()
+                };
+                let start = Instant::now();
+                let calibration = render(&self.scene, estimator, &options, &Silent)
+                    .inspect_err(|_| plan.calibration_failed.set(true))?;
+                let spent = plan.calibration_seconds.get() + start.elapsed().as_secs_f64();
+                plan.calibration_seconds.set(spent);
+                self.progress.advance(1);
+                plan::extrapolate(&calibration.report, scale)
+            }
+        };
+        items.push(plan::PlanItem {
+            experiment: experiment.into(),
+            also_needed_by: vec![],
+            what,
+            work,
+            cached: cached.is_some(),
+            cache: Some(stem),
+            seconds,
+        });
+        drop(items);
+        Ok(cached.unwrap_or_else(|| self.stand_in(aovs)))
+    }
+}
+
+/// The cached image at `exr_path` with its report at `json_path` and its `aovs`, where both
+/// files are there and the report is this version's.
+fn read_cached(
+    exr_path: &Path,
+    json_path: &Path,
+    aovs: &[Aov],
+) -> Option<(HmdImage, RenderReport, Vec<HmdImage>)> {
+    let image = exr::read(exr_path).ok()?;
+    let report: RenderReport = serde_json::from_str(&std::fs::read_to_string(json_path).ok()?).ok()?;
+    // The version is in the key; a report that says otherwise was not ours.
+    if report.hmdist_version != env!("CARGO_PKG_VERSION") {
+        return None;
+    }
+    let channels = aovs
+        .iter()
+        .map(|a| exr::read_channel(exr_path, a.name()).ok())
+        .collect::<Option<Vec<_>>>()?;
+    Some((image, report, channels))
 }

@@ -282,6 +282,7 @@ pub fn fig16_17(runner: &Runner) -> Result<Section> {
 /// Table 4: photon map build seconds (trace and kd-tree) against photon count, light vs camera.
 pub fn table4(runner: &Runner) -> Result<Section> {
     let p = &runner.params;
+    let start = Instant::now();
     let accel = Accel::build(&runner.scene.mesh, BuildQuality::High);
     let camera = runner.scene.camera.rays(p.size, p.size);
     let mut sources = vec![("camera", PhotonSource::Camera(camera, p.size, p.size))];
@@ -292,6 +293,19 @@ pub fn table4(runner: &Runner) -> Result<Section> {
         max_bounces: LONG_PATHS,
         absorption: DEFAULT_ABSORPTION,
     };
+    // Traces `photons` from `source` and indexes them: the seconds of each.
+    let build = |source: &PhotonSource, photons: usize| -> Result<(f64, f64)> {
+        let start = Instant::now();
+        let traced = trace_photons(&accel, source, rules, photons, 1, &|_| {})?;
+        let trace = start.elapsed().as_secs_f64();
+        let start = Instant::now();
+        drop(PhotonMap::build(&traced.photons, PhotonMethod::StoredDistance)?);
+        Ok((trace, start.elapsed().as_secs_f64()))
+    };
+    if runner.planning() {
+        plan_table4(runner, &sources, start.elapsed().as_secs_f64(), build)?;
+        return Ok(Section::default());
+    }
     let mut ours = Table::new(
         &format!(
             "Table 4 ({}): photon map build seconds, {LONG_PATHS} bounces, `{}`",
@@ -309,13 +323,7 @@ pub fn table4(runner: &Runner) -> Result<Section> {
         .collect();
     for &photons in &p.photons {
         for ((name, source), series) in sources.iter().zip(&mut series) {
-            let start = Instant::now();
-            let traced = trace_photons(&accel, source, rules, photons, 1, &|_| {})?;
-            let trace = start.elapsed().as_secs_f64();
-            let start = Instant::now();
-            let map = PhotonMap::build(&traced.photons, PhotonMethod::StoredDistance)?;
-            let index = start.elapsed().as_secs_f64();
-            drop(map);
+            let (trace, index) = build(source, photons)?;
             series.points.push((photons as f64, trace + index));
             ours.push(vec![
                 photons.to_string(),
@@ -354,6 +362,44 @@ pub fn table4(runner: &Runner) -> Result<Section> {
         files,
         notes: vec![],
     })
+}
+
+/// Table 4's plan: its photon map builds, estimated in proportion to one build timed per
+/// source, of the largest count up to a quarter of all counts together (small maps are
+/// timed too noisily: at 130 K photons a build is a tenth of a second), plus the BVH build
+/// (`accel_seconds`).
+fn plan_table4(
+    runner: &Runner,
+    sources: &[(&str, PhotonSource)],
+    accel_seconds: f64,
+    build: impl Fn(&PhotonSource, usize) -> Result<(f64, f64)>,
+) -> Result<()> {
+    let counts = &runner.params.photons;
+    let all: usize = counts.iter().sum();
+    let timed = counts
+        .iter()
+        .copied()
+        .filter(|&n| n <= all / 4)
+        .max()
+        .unwrap_or(counts[0]);
+    let mut seconds = accel_seconds;
+    for (_, source) in sources {
+        let (trace, index) = build(source, timed)?;
+        seconds += (trace + index) * all as f64 / timed as f64;
+    }
+    let names: Vec<&str> = sources.iter().map(|(name, _)| *name).collect();
+    runner.plan_work(
+        format!(
+            "photon map builds: {} counts from {} to {}, {} source, {LONG_PATHS} bounces",
+            counts.len(),
+            counts[0],
+            counts[counts.len() - 1],
+            names.join(" and ")
+        ),
+        format!("{:.3e} photons", all as f64 * sources.len() as f64),
+        seconds,
+    );
+    Ok(())
 }
 
 /// Memory per photon, ours against the paper's.

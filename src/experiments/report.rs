@@ -37,6 +37,12 @@ pub fn write(runner: &Runner) -> Result<()> {
         runner.params.reference_rays,
         runner.scene.diagonal()
     );
+    if let Some(table) = runner.plan_against_run() {
+        table.write(&runner.out, "plan_vs_actual")?;
+        body += &html_table(&table);
+        body += "<p>From <a href=\"plan.md\">plan.md</a>: each image's seconds count in the first experiment that needs it; \
+                 an experiment whose images an earlier run cached takes less than planned.</p>\n";
+    }
     for section in &runner.sections {
         let _ = writeln!(body, "<h2 id=\"{0}\">{0}</h2>", escape(&section.name));
         for table in &section.tables {

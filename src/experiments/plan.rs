@@ -1,0 +1,302 @@
+//! `hmdist experiment NAME --plan`: what a run will cost, before it is paid.
+//!
+//! The experiments run as they would, but every image they ask for is looked up in the cache
+//! and, where it is not there, *calibrated* instead of rendered: the same estimator renders
+//! every `M`-th row of the image (a shard, [`crate::shard`], of [`CALIBRATION_ROWS`] rows
+//! spread over the image), and its seconds are extrapolated to the whole image: the BVH
+//! build and the work an estimator does once per image (tracing and indexing photons,
+//! uploading to the GPU) count once, the primary rays and the per-pixel work count
+//! `size / rows` times. An image two experiments need is listed once, under the first that
+//! asks for it (in the order `all` runs them), with the others named beside it. Work that is
+//! not an image (Table 4's photon map builds) is estimated by its experiment from a smaller
+//! instance of itself, timed.
+//!
+//! The plan is written to `OUT/plan.json` (and `plan.md`, `plan.csv`); nothing else is
+//! written, the cache included. A later run's report states each experiment's planned
+//! seconds beside the seconds it took ([`comparison`]).
+
+use serde::{Deserialize, Serialize};
+
+use super::table::Table;
+use crate::report::{Parameters, RenderReport};
+
+/// Rows a calibration renders (every `size / CALIBRATION_ROWS`-th row of the image).
+pub const CALIBRATION_ROWS: u32 = 8;
+
+/// The plan of one or more experiments on one scene and preset.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Plan {
+    /// The scene's name.
+    pub scene: String,
+    /// The preset's name.
+    pub preset: String,
+    /// Image side in pixels.
+    pub size: u32,
+    /// Where gather and the cube map run (as asked: `auto`, `cpu`, `gpu`).
+    pub backend: String,
+    /// The machine the estimates hold for.
+    pub machine: Machine,
+    /// Seconds the calibrations took.
+    pub calibration_seconds: f64,
+    /// Every image and piece of work, each once, in the order the run meets them.
+    pub items: Vec<PlanItem>,
+    /// Per experiment: what it adds and its estimated seconds.
+    pub experiments: Vec<PlannedExperiment>,
+    /// Estimated seconds of the whole run.
+    pub total_seconds: f64,
+}
+
+/// One image (or other piece of work) of a plan.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct PlanItem {
+    /// The first experiment that needs it: its cost is counted there.
+    pub experiment: String,
+    /// The other experiments that use it (from the cache, at no cost).
+    pub also_needed_by: Vec<String>,
+    /// Method and parameters, e.g. `gather N = 65536, seed 1000003`.
+    pub what: String,
+    /// Its size in rays, or photons and queries.
+    pub work: String,
+    /// The cache file's stem, for images.
+    pub cache: Option<String>,
+    /// Whether the cache already holds it.
+    pub cached: bool,
+    /// Estimated seconds; 0 when cached.
+    pub seconds: f64,
+}
+
+/// One experiment's share of a plan.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct PlannedExperiment {
+    /// Its name.
+    pub name: String,
+    /// Images it needs first (rendered in it), and of those already cached.
+    pub images: usize,
+    /// Of those, already in the cache.
+    pub cached: usize,
+    /// Estimated seconds.
+    pub seconds: f64,
+}
+
+/// The CPU and cores the plan was measured on.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct Machine {
+    /// The CPU's model name (`/proc/cpuinfo`), or `unknown`.
+    pub cpu: String,
+    /// Threads the renders use.
+    pub threads: usize,
+}
+
+impl Machine {
+    /// This machine.
+    pub fn this() -> Machine {
+        let cpu = std::fs::read_to_string("/proc/cpuinfo")
+            .ok()
+            .and_then(|text| {
+                text.lines()
+                    .find(|l| l.starts_with("model name"))
+                    .and_then(|l| l.split_once(':'))
+                    .map(|(_, name)| name.trim().to_string())
+            })
+            .unwrap_or_else(|| "unknown".into());
+        Machine {
+            cpu,
+            threads: rayon::current_num_threads(),
+        }
+    }
+}
+
+/// The shard a calibration renders of a `size`-row image: every `M`-th row, and the factor
+/// from its rows to the image's.
+pub fn calibration_shard(size: u32) -> (crate::shard::Shard, f64) {
+    let count = (size / CALIBRATION_ROWS).max(1);
+    let rows = size.div_ceil(count);
+    let shard = crate::shard::Shard { index: 0, count };
+    (shard, size as f64 / rows as f64)
+}
+
+/// The seconds of the whole image from a calibration render's report: the primary rays and
+/// the estimator's per-pixel work scaled by `scale`; the BVH build, the once-per-image phases
+/// and whatever of the total no phase names (setting up) as measured.
+pub fn extrapolate(report: &RenderReport, scale: f64) -> f64 {
+    let s = &report.seconds;
+    let p = &s.phases;
+    let once = [p.photon_trace, p.photon_index, p.gpu_upload]
+        .iter()
+        .fold(0.0, |total, phase| total + phase.unwrap_or(0.0));
+    let per_row = (s.primary + s.estimate - once).max(0.0);
+    let rest = (s.total - s.accel_build - s.primary - s.estimate).max(0.0);
+    s.accel_build + once + rest + per_row * scale
+}
+
+/// `method` with `parameters` and `seed`, in words, and its work at `pixels` pixels.
+pub fn describe(method: &str, parameters: &Parameters, seed: u64, pixels: u64) -> (String, String) {
+    let mut what = vec![method.to_string()];
+    let mut work = String::new();
+    if let Some(rays) = parameters.rays {
+        what.push(format!("N = {rays}"));
+        work = format!("{:.3e} rays", pixels as f64 * rays as f64);
+    }
+    if let Some(c) = &parameters.cubemap {
+        what.push(format!("R = {}", c.cube_res));
+        if let Some(rays) = parameters.rays {
+            work = format!("{:.3e} lookups", pixels as f64 * rays as f64);
+        }
+    }
+    if let Some(a) = &parameters.adaptive {
+        what.push(format!("tolerance {} (N ≤ {})", a.tolerance, a.max_rays));
+        work = format!("≤ {:.3e} rays", pixels as f64 * a.max_rays as f64);
+    }
+    if let Some(p) = &parameters.photon {
+        what.push(format!(
+            "{} photons, K = {}, {} source, {} bounces",
+            p.photons,
+            p.gather,
+            p.source.name(),
+            p.max_bounces
+        ));
+        work = format!(
+            "{:.3e} photons, {:.3e} photons gathered",
+            p.photons as f64,
+            pixels as f64 * p.gather as f64
+        );
+    }
+    what.push(format!("seed {seed}"));
+    (what.join(", "), work)
+}
+
+impl Plan {
+    /// Adds up the items per experiment (in `order`) and in all.
+    pub fn total(&mut self, order: &[&str]) {
+        self.experiments = order
+            .iter()
+            .map(|&name| {
+                let first: Vec<&PlanItem> = self.items.iter().filter(|i| i.experiment == name).collect();
+                PlannedExperiment {
+                    name: name.into(),
+                    images: first.iter().filter(|i| i.cache.is_some()).count(),
+                    cached: first.iter().filter(|i| i.cache.is_some() && i.cached).count(),
+                    seconds: first.iter().fold(0.0, |total, i| total + i.seconds),
+                }
+            })
+            .collect();
+        self.total_seconds = self.experiments.iter().fold(0.0, |total, e| total + e.seconds);
+    }
+
+    /// Every item, as a table.
+    pub fn items_table(&self) -> Table {
+        let mut table = Table::new(
+            &format!(
+                "Plan: `{}`, preset {}, {}², {} threads on {}",
+                self.scene, self.preset, self.size, self.machine.threads, self.machine.cpu
+            ),
+            &["experiment", "image or work", "size", "cached", "estimated s", "also used by"],
+        );
+        for item in &self.items {
+            table.push(vec![
+                item.experiment.clone(),
+                item.what.clone(),
+                item.work.clone(),
+                if item.cache.is_none() {
+                    "—".into()
+                } else if item.cached {
+                    "yes".into()
+                } else {
+                    "no".into()
+                },
+                format!("{:.1}", item.seconds),
+                item.also_needed_by.join(" "),
+            ]);
+        }
+        table
+    }
+
+    /// The experiments' totals, as a table.
+    pub fn summary_table(&self) -> Table {
+        let mut table = Table::new(
+            &format!(
+                "Plan by experiment: {} (calibration took {:.1} s)",
+                hours(self.total_seconds),
+                self.calibration_seconds
+            ),
+            &["experiment", "new images", "of them cached", "estimated s"],
+        );
+        for e in &self.experiments {
+            table.push(vec![
+                e.name.clone(),
+                e.images.to_string(),
+                e.cached.to_string(),
+                format!("{:.1}", e.seconds),
+            ]);
+        }
+        table.push(vec![
+            "total".into(),
+            self.experiments.iter().map(|e| e.images).sum::<usize>().to_string(),
+            self.experiments.iter().map(|e| e.cached).sum::<usize>().to_string(),
+            format!("{:.1}", self.total_seconds),
+        ]);
+        table
+    }
+}
+
+/// `seconds` as hours and minutes, for people.
+fn hours(seconds: f64) -> String {
+    let minutes = (seconds / 60.0).round() as u64;
+    format!("{} h {:02} min", minutes / 60, minutes % 60)
+}
+
+/// The planned seconds of each experiment that `actual` (name, seconds of this run) timed,
+/// beside the actual ones; `None` when the plan covers none of them.
+pub fn comparison(plan: &Plan, actual: &[(String, f64)]) -> Option<Table> {
+    let mut table = Table::new(
+        &format!(
+            "Plan against run: estimated seconds (calibrated on {}, {} threads) and seconds taken",
+            plan.machine.cpu, plan.machine.threads
+        ),
+        &["experiment", "planned s", "actual s", "actual ÷ planned"],
+    );
+    for (name, seconds) in actual {
+        if let Some(planned) = plan.experiments.iter().find(|e| &e.name == name) {
+            let ratio = if planned.seconds > 0.0 {
+                format!("{:.2}", seconds / planned.seconds)
+            } else {
+                "".into()
+            };
+            table.push(vec![
+                name.clone(),
+                format!("{:.1}", planned.seconds),
+                format!("{seconds:.1}"),
+                ratio,
+            ]);
+        }
+    }
+    (!table.rows.is_empty()).then_some(table)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_calibration_shard_renders_about_eight_rows_spread_over_the_image() {
+        let (shard, scale) = calibration_shard(1024);
+        assert_eq!((shard.count, scale), (128, 128.0));
+        let (shard, scale) = calibration_shard(48);
+        assert_eq!((shard.count, scale), (6, 6.0));
+        let rows = (0..50).filter(|&r| calibration_shard(50).0.has_row(r)).count();
+        assert_eq!(50.0 / rows as f64, calibration_shard(50).1);
+        assert_eq!(calibration_shard(5), (crate::shard::Shard { index: 0, count: 1 }, 1.0));
+    }
+
+    #[test]
+    fn extrapolation_counts_the_build_and_the_photon_map_once_and_scales_the_rest() {
+        let mut report = RenderReport::default();
+        report.seconds.accel_build = 1.0;
+        report.seconds.phases.photon_trace = Some(2.0);
+        report.seconds.phases.photon_index = Some(0.5);
+        report.seconds.primary = 0.125;
+        report.seconds.estimate = 2.5 + 0.25;
+        report.seconds.total = 1.0 + 0.125 + 2.75 + 0.5;
+        assert_eq!(extrapolate(&report, 8.0), 1.0 + 2.5 + 0.5 + 8.0 * 0.375);
+    }
+}
