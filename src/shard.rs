@@ -15,7 +15,7 @@ use crate::error::{Error, Result};
 use crate::estimators::{AovImage, Estimator};
 use crate::image::HmdImage;
 use crate::render::{RenderOptions, Rendered};
-use crate::report::RenderReport;
+use crate::report::{CubemapDetails, PhaseSeconds, RenderReport};
 use crate::scene::{stable_hash, Scene};
 
 /// Shard `index` of `count`.
@@ -174,6 +174,33 @@ pub fn merge(parts: Vec<Part>) -> Result<Rendered> {
     report.seconds.primary = parts.iter().map(|p| p.report.seconds.primary).sum();
     report.seconds.accel_build = parts.iter().map(|p| p.report.seconds.accel_build).sum();
     report.seconds.load = parts.iter().map(|p| p.report.seconds.load).sum();
+    let phase = |f: fn(&PhaseSeconds) -> Option<f64>| {
+        parts
+            .iter()
+            .map(|p| f(&p.report.seconds.phases))
+            .sum::<Option<f64>>()
+    };
+    let phases = &mut report.seconds.phases;
+    phases.cubemap_build_and_lookup = phase(|p| p.cubemap_build_and_lookup);
+    phases.cubemap_build = phase(|p| p.cubemap_build);
+    phases.cubemap_lookup = phase(|p| p.cubemap_lookup);
+    phases.gather = phase(|p| p.gather);
+    phases.photon_trace = phase(|p| p.photon_trace);
+    phases.photon_index = phase(|p| p.photon_index);
+    phases.gpu_upload = phase(|p| p.gpu_upload);
+    phases.gpu_trace = phase(|p| p.gpu_trace);
+    phases.gpu_readback = phase(|p| p.gpu_readback);
+    if let Some(cubemap) = &mut report.details.cubemap {
+        let count = |f: fn(&CubemapDetails) -> u64| {
+            parts
+                .iter()
+                .map(|p| p.report.details.cubemap.as_ref().map_or(0, f))
+                .sum::<u64>()
+        };
+        cubemap.texels_rasterised = count(|c| c.texels_rasterised);
+        cubemap.lookups = count(|c| c.lookups);
+        cubemap.escaped_lookups = count(|c| c.escaped_lookups);
+    }
     let ray_seconds: f64 = parts.iter().map(|p| p.report.seconds.estimate).sum();
     report.mrays_per_s = report.rays_cast.map(|r| r as f64 / ray_seconds.max(1e-9) / 1e6);
     report.shard = None;

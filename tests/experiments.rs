@@ -285,7 +285,11 @@ fn a_plan_lists_each_image_once_and_exactly_those_a_run_then_renders_once_each()
     let renders = Renders::default();
     let mut runner = Runner::new("slab", Preset::Quick, &out, &renders).unwrap();
     runner.run("all").unwrap();
-    assert_eq!(cached_stems(&out), distinct, "the run renders what the plan listed");
+    assert_eq!(
+        cached_stems(&out),
+        distinct,
+        "the run renders what the plan listed"
+    );
     assert_eq!(
         renders.0.load(std::sync::atomic::Ordering::Relaxed),
         distinct.len() as u64,
@@ -307,5 +311,79 @@ fn a_plan_lists_each_image_once_and_exactly_those_a_run_then_renders_once_each()
         .filter(|i| i.cache.is_none())
         .map(|i| i.seconds)
         .sum();
-    assert_eq!(again.total_seconds, work, "only the work that is not an image is left");
+    assert_eq!(
+        again.total_seconds, work,
+        "only the work that is not an image is left"
+    );
+}
+
+#[test]
+fn an_image_rendered_in_parts_is_the_whole_image_bit_for_bit_and_leaves_no_parts() {
+    let dir = Scratch::new("experiments-parts");
+    let (whole, parted) = (dir.join("whole"), dir.join("parted"));
+    Runner::new("slab", Preset::Quick, &whole, &Silent)
+        .unwrap()
+        .run("table1")
+        .unwrap();
+    // Every image of 48² × 256 rays or more (the reference, gather and the cube map from
+    // N = 256 up) in 16 parts.
+    Runner::new("slab", Preset::Quick, &parted, &Silent)
+        .unwrap()
+        .with_part_rays(48 * 48 * 256)
+        .run("table1")
+        .unwrap();
+    let exrs = |out: &Path| -> BTreeMap<String, Vec<u8>> {
+        std::fs::read_dir(out.join("cache"))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|e| e == "exr"))
+            .map(|p| {
+                (
+                    p.file_name().unwrap().to_string_lossy().into_owned(),
+                    std::fs::read(&p).unwrap(),
+                )
+            })
+            .collect()
+    };
+    let (a, b) = (exrs(&whole), exrs(&parted));
+    assert_eq!(
+        a.keys().collect::<Vec<_>>(),
+        b.keys().collect::<Vec<_>>(),
+        "the same images, no parts left"
+    );
+    for (name, bytes) in &a {
+        assert!(&b[name] == bytes, "{name} differs");
+    }
+    let csv = |out: &Path, column_index: usize| {
+        column(
+            &std::fs::read_to_string(out.join("table1.csv")).unwrap(),
+            column_index,
+        )
+    };
+    assert_eq!(csv(&whole, 2), csv(&parted, 2), "the cube map's f_diff");
+    // The parts' reports are summed: the merged report counts every lookup once.
+    let report = |out: &Path| -> serde_json::Value {
+        let cache = out.join("cache");
+        let json = std::fs::read_dir(&cache)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .find(|p| {
+                let text = std::fs::read_to_string(p).unwrap_or_default();
+                p.extension().is_some_and(|e| e == "json")
+                    && text.contains("\"cube_res\"")
+                    && text.contains("\"rays\": 2048")
+            })
+            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap()
+    };
+    let (w, p) = (report(&whole), report(&parted));
+    for field in ["rays_cast", "lookups", "texels_rasterised", "escaped_lookups"] {
+        assert!(
+            w[field].as_u64().is_some_and(|n| n > 0) || field == "escaped_lookups",
+            "{field}: {}",
+            w[field]
+        );
+        assert_eq!(w[field], p[field], "{field}");
+    }
+    assert_eq!(p["shards"].as_array().unwrap().len(), 16);
 }

@@ -28,15 +28,15 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use crate::error::{Error, Result};
-use crate::estimators::{registry, Aov, Backend, Estimator, MethodConfig};
+use crate::estimators::{registry, Aov, AovImage, Backend, Estimator, MethodConfig};
 use crate::image::{exr, write_atomically, HmdImage};
 use crate::progress::{Progress, Silent};
 use crate::render::{render, RenderOptions};
 use crate::report::RenderReport;
 use crate::scene::{stable_hash, Scene};
 use crate::shard::Shard;
-use std::cell::Cell;
 pub use plan::Plan;
+use std::cell::Cell;
 pub use table::Table;
 
 /// One experiment: its name, what it shows, how many images it may render, and the code.
@@ -124,6 +124,14 @@ pub fn select(name: &str) -> Result<Vec<&'static Experiment>> {
         }
     }
 }
+
+/// Images that cast at least this many rays (2³³, about 20 minutes at 7 M rays/s) are
+/// rendered in [`PARTS`] row shards, each cached when done, so that a run stopped by the end
+/// of a working session keeps most of the work (at paper scale: the 65,536-ray reference,
+/// 6.9·10¹⁰ rays, and Fig. 9's cube maps).
+pub const PART_RAYS: u64 = 1 << 33;
+/// Parts of such an image.
+pub const PARTS: u32 = 16;
 
 /// Seed of the reference images: independent of the seed of the images compared with them.
 pub const REFERENCE_SEED: u64 = 1_000_003;
@@ -243,6 +251,8 @@ pub struct Runner<'a> {
     pub planned: Option<Plan>,
     /// Wall seconds of each experiment this run ran, in order.
     pub timings: Vec<(String, f64)>,
+    /// Images of at least this many rays are rendered in parts ([`PART_RAYS`]).
+    part_rays: u64,
 }
 
 /// A plan in the making ([`plan`]): every image the experiments ask for is looked up in the
@@ -294,6 +304,7 @@ impl<'a> Runner<'a> {
             plan: None,
             planned: None,
             timings: vec![],
+            part_rays: PART_RAYS,
         })
     }
 
@@ -337,6 +348,15 @@ impl<'a> Runner<'a> {
     /// part of the image cache's key: shards and the run that assembles them must agree.
     pub fn with_backend(self, backend: Backend) -> Self {
         Runner { backend, ..self }
+    }
+
+    /// This runner rendering images of at least `rays` rays in parts (default [`PART_RAYS`]):
+    /// the parts, merged, are the whole image bit for bit, so this changes no output.
+    pub fn with_part_rays(self, rays: u64) -> Self {
+        Runner {
+            part_rays: rays,
+            ..self
+        }
     }
 
     /// This runner as shard `shard` of a run spread over machines (see `ShardRun`): its tables
@@ -528,15 +548,20 @@ impl<'a> Runner<'a> {
             aovs: aovs.to_vec(),
             ..RenderOptions::default()
         };
-        let rendered = render(&self.scene, estimator, &options, &Silent).inspect_err(|_| {
-            if let Some((s, _)) = request {
-                s.render_failed.set(true);
-            }
-        })?;
+        let rendered = self
+            .render_in_parts(estimator, &options, &stem)
+            .inspect_err(|_| {
+                if let Some((s, _)) = request {
+                    s.render_failed.set(true);
+                }
+            })?;
         if let Some((s, _)) = request {
             s.rendered.set(s.rendered.get() + 1);
         }
-        write_atomically(&exr_path, &exr::encode(&rendered.image, &rendered.aovs, &exr_path)?)?;
+        write_atomically(
+            &exr_path,
+            &exr::encode(&rendered.image, &rendered.aovs, &exr_path)?,
+        )?;
         // The JSON last: an image counts as cached only once both files are in place.
         write_atomically(&json_path, rendered.report.to_json().as_bytes())?;
         self.progress.advance(1);
@@ -546,6 +571,97 @@ impl<'a> Runner<'a> {
             .map(|a| HmdImage::new(size, size, a.data))
             .collect();
         Ok((rendered.image, rendered.report, channels))
+    }
+
+    /// How many parts an image is rendered in: [`PARTS`] where it casts at least
+    /// [`PART_RAYS`] rays (or what [`Runner::with_part_rays`] set), else 1.
+    fn parts(&self, estimator: &dyn Estimator) -> u32 {
+        let pixels = self.params.size as u64 * self.params.size as u64;
+        if estimator.expected_rays(pixels) >= self.part_rays {
+            PARTS
+        } else {
+            1
+        }
+    }
+
+    /// The cache stem of part `k` of `parts` of the image `stem`.
+    fn part_stem(stem: &str, k: u32, parts: u32) -> String {
+        format!("{stem}.part-{k}-of-{parts}")
+    }
+
+    /// Of the parts of the image `stem` that `estimator` renders, those already cached.
+    fn parts_cached(&self, estimator: &dyn Estimator, stem: &str) -> u32 {
+        let parts = self.parts(estimator);
+        if parts == 1 {
+            return 0;
+        }
+        (0..parts)
+            .filter(|&k| {
+                let part = Self::part_stem(stem, k, parts);
+                self.cache.join(format!("{part}.json")).exists()
+            })
+            .count() as u32
+    }
+
+    /// Renders the image `stem` with `options`: whole, or (see [`Runner::parts`]) as row
+    /// shards, each cached as soon as it is done (an interrupted run keeps the parts it
+    /// finished, and the next one renders only the others), then merged (bit for bit the
+    /// whole image: [`crate::shard::merge`]) and the parts removed.
+    fn render_in_parts(
+        &self,
+        estimator: &dyn Estimator,
+        options: &RenderOptions,
+        stem: &str,
+    ) -> Result<crate::render::Rendered> {
+        let count = self.parts(estimator);
+        if count == 1 {
+            return render(&self.scene, estimator, options, &Silent);
+        }
+        let mut parts = vec![];
+        let mut files = vec![];
+        for k in 0..count {
+            let part = Self::part_stem(stem, k, count);
+            let (exr_path, json_path) = (
+                self.cache.join(format!("{part}.exr")),
+                self.cache.join(format!("{part}.json")),
+            );
+            let (image, report, aovs) = match read_cached(&exr_path, &json_path, &options.aovs) {
+                Some(cached) => cached,
+                None => {
+                    let options = RenderOptions {
+                        shard: Some(Shard::new(k, count)?),
+                        ..options.clone()
+                    };
+                    let rendered = render(&self.scene, estimator, &options, &Silent)?;
+                    let bytes = exr::encode(&rendered.image, &rendered.aovs, &exr_path)?;
+                    write_atomically(&exr_path, &bytes)?;
+                    write_atomically(&json_path, rendered.report.to_json().as_bytes())?;
+                    let (width, height) = (options.width, options.height);
+                    let aovs = rendered
+                        .aovs
+                        .into_iter()
+                        .map(|a| HmdImage::new(width, height, a.data));
+                    (rendered.image, rendered.report, aovs.collect())
+                }
+            };
+            let aovs = options
+                .aovs
+                .iter()
+                .zip(aovs)
+                .map(|(&aov, image)| AovImage {
+                    aov,
+                    data: image.data,
+                })
+                .collect();
+            parts.push(crate::shard::Part { image, aovs, report });
+            files.extend([exr_path, json_path]);
+        }
+        let merged = crate::shard::merge(parts)?;
+        for file in files {
+            // The whole image is written next; a part left behind only costs disk.
+            let _ = std::fs::remove_file(file);
+        }
+        Ok(merged)
     }
 
     /// An image of the preset's size standing in for one this run does not render.
@@ -581,12 +697,16 @@ impl<'a> Runner<'a> {
             return Ok(cached.unwrap_or_else(|| self.stand_in(aovs)));
         }
         let size = self.params.size;
-        let (what, work) = plan::describe(
+        let (mut what, work) = plan::describe(
             estimator.method(),
             &estimator.parameters(),
             seed,
             size as u64 * size as u64,
         );
+        let (parts, parts_cached) = (self.parts(estimator), self.parts_cached(estimator, &stem));
+        if parts > 1 {
+            what += &format!(" ({parts_cached} of {parts} parts cached)");
+        }
         let seconds = match &cached {
             Some(_) => 0.0,
             None => {
@@ -605,7 +725,8 @@ impl<'a> Runner<'a> {
                 let spent = plan.calibration_seconds.get() + start.elapsed().as_secs_f64();
                 plan.calibration_seconds.set(spent);
                 self.progress.advance(1);
-                plan::extrapolate(&calibration.report, scale)
+                let left = (parts - parts_cached) as f64 / parts as f64;
+                plan::extrapolate(&calibration.report, scale) * left
             }
         };
         items.push(plan::PlanItem {

@@ -190,7 +190,14 @@ impl Plan {
                 "Plan: `{}`, preset {}, {}², {} threads on {}",
                 self.scene, self.preset, self.size, self.machine.threads, self.machine.cpu
             ),
-            &["experiment", "image or work", "size", "cached", "estimated s", "also used by"],
+            &[
+                "experiment",
+                "image or work",
+                "size",
+                "cached",
+                "estimated s",
+                "also used by",
+            ],
         );
         for item in &self.items {
             table.push(vec![
@@ -231,8 +238,16 @@ impl Plan {
         }
         table.push(vec![
             "total".into(),
-            self.experiments.iter().map(|e| e.images).sum::<usize>().to_string(),
-            self.experiments.iter().map(|e| e.cached).sum::<usize>().to_string(),
+            self.experiments
+                .iter()
+                .map(|e| e.images)
+                .sum::<usize>()
+                .to_string(),
+            self.experiments
+                .iter()
+                .map(|e| e.cached)
+                .sum::<usize>()
+                .to_string(),
             format!("{:.1}", self.total_seconds),
         ]);
         table
@@ -285,7 +300,10 @@ mod tests {
         assert_eq!((shard.count, scale), (6, 6.0));
         let rows = (0..50).filter(|&r| calibration_shard(50).0.has_row(r)).count();
         assert_eq!(50.0 / rows as f64, calibration_shard(50).1);
-        assert_eq!(calibration_shard(5), (crate::shard::Shard { index: 0, count: 1 }, 1.0));
+        assert_eq!(
+            calibration_shard(5),
+            (crate::shard::Shard { index: 0, count: 1 }, 1.0)
+        );
     }
 
     #[test]
