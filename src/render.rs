@@ -115,34 +115,59 @@ pub fn render(
     options: &RenderOptions,
     progress: &dyn Progress,
 ) -> Result<Rendered> {
+    let mut rendered = render_outputs(scene, &[estimator], options, |context, gbuffer| {
+        let start = Instant::now();
+        let estimate = estimate(estimator, context, gbuffer, progress)?;
+        Ok(vec![(estimate, start.elapsed().as_secs_f64())])
+    })?;
+    Ok(rendered.remove(0))
+}
+
+/// Renders `scene` once for several `estimators` that share the BVH, the primary hits and
+/// the seed (built for the one that casts the most rays): `pass` makes every estimator's
+/// [`Estimate`] and its seconds, in order, from the one context and G-buffer; each comes back
+/// with its own report, as [`render`] would write it for that estimator alone (but for its
+/// timings). A multi-output pass ([`crate::estimators::cubemap::sweep`]) uses it.
+pub fn render_outputs(
+    scene: &Scene,
+    estimators: &[&dyn Estimator],
+    options: &RenderOptions,
+    pass: impl FnOnce(&EstimateContext, &GBuffer) -> Result<Vec<(Estimate, f64)>> + Send,
+) -> Result<Vec<Rendered>> {
     options.validate()?;
     scene.validate()?;
-    if let Some(aov) = options.aovs.iter().find(|a| !estimator.aovs().contains(a)) {
-        let message = format!("{} is not measured by {}", aov.name(), estimator.method());
-        return Err(Error::invalid("aov", message));
+    for estimator in estimators {
+        if let Some(aov) = options.aovs.iter().find(|a| !estimator.aovs().contains(a)) {
+            let message = format!("{} is not measured by {}", aov.name(), estimator.method());
+            return Err(Error::invalid("aov", message));
+        }
     }
     let pixels = options.width as u64 * options.height as u64;
     let what = format!("{}x{}", options.width, options.height);
-    let needed = crate::memory::image_bytes(pixels, options.aovs.len());
+    let needed = crate::memory::image_bytes(pixels, options.aovs.len()) * estimators.len() as u128;
     crate::memory::check(Some("size"), &what, needed, None)?;
     crate::memory::check_bvh(scene.mesh.triangle_count())?;
     in_pool(options.threads, || {
-        render_in_pool(scene, estimator, options, progress)
+        render_in_pool(scene, estimators, options, pass)
     })?
 }
 
 fn render_in_pool(
     scene: &Scene,
-    estimator: &dyn Estimator,
+    estimators: &[&dyn Estimator],
     options: &RenderOptions,
-    progress: &dyn Progress,
-) -> Result<Rendered> {
+    pass: impl FnOnce(&EstimateContext, &GBuffer) -> Result<Vec<(Estimate, f64)>>,
+) -> Result<Vec<Rendered>> {
     let kernel = Kernel::from_env()?;
     let pixels = options.width as u64 * options.height as u64;
-    let bvh = options.bvh_quality.resolve(
-        pixels + estimator.expected_rays(pixels),
-        scene.mesh.triangle_count(),
-    );
+    let expected = estimators
+        .iter()
+        .map(|e| e.expected_rays(pixels))
+        .max()
+        .unwrap_or(0);
+    let bvh = options
+        .bvh_quality
+        .resolve(pixels + expected, scene.mesh.triangle_count());
     let start = Instant::now();
     let accel = Accel::build(&scene.mesh, bvh).with_kernel(kernel);
     let accel_build = start.elapsed().as_secs_f64();
@@ -174,71 +199,76 @@ fn render_in_pool(
         whole_image: shard.is_none(),
         bvh,
     };
-    let estimate_start = Instant::now();
-    let estimate = estimate(estimator, &context, &gbuffer, progress)?;
-    let estimate_seconds = estimate_start.elapsed().as_secs_f64();
-
+    let setup = start.elapsed().as_secs_f64();
+    let estimates = pass(&context, &gbuffer)?;
     let camera = &scene.camera;
-    let report = RenderReport {
-        hmdist_version: env!("CARGO_PKG_VERSION").into(),
-        method: estimator.method().into(),
-        scene: scene.name.clone(),
-        width: options.width,
-        height: options.height,
-        seed: options.seed,
-        threads: rayon::current_num_threads(),
-        kernel: kernel.name().into(),
-        bvh: bvh.name().into(),
-        max_distance: options.max_distance,
-        triangles: scene.mesh.triangle_count(),
-        l_diag,
-        d_min: context.clamp.min,
-        bounds: BoundsReport {
-            min: bounds.min.to_array(),
-            max: bounds.max.to_array(),
-        },
-        camera: CameraReport {
-            eye: camera.eye.to_array(),
-            target: camera.target.to_array(),
-            up: camera.up.to_array(),
-            fov_y_deg: camera.fov_y_deg,
-        },
-        light: scene.light.map(|l| LightReport {
-            position: l.position.to_array(),
-            direction: l.direction.to_array(),
-            cone_half_angle_deg: l.cone_half_angle_deg,
-        }),
-        display_scale: scene.display_scale,
-        background_pixels: background,
-        rays_cast: estimate.rays.map(|r| r.cast),
-        escaped_rays: estimate.rays.map(|r| r.escaped),
-        mrays_per_s: estimate.rays.map(|r| r.cast as f64 / r.seconds.max(1e-9) / 1e6),
-        seconds: Seconds {
-            load: 0.0,
-            accel_build,
-            primary,
-            estimate: estimate_seconds,
-            total: start.elapsed().as_secs_f64(),
-            phases: estimate.phases,
-        },
-        channels: std::iter::once("Y")
-            .chain(options.aovs.iter().map(|a| a.name()))
-            .map(String::from)
-            .collect(),
-        shard: shard.map(|s| ShardReport {
-            index: s.index,
-            count: s.count,
-            fingerprint: crate::shard::fingerprint(scene, estimator, options),
-        }),
-        shards: None,
-        parameters: estimator.parameters(),
-        details: estimate.details,
-    };
-    Ok(Rendered {
-        image: HmdImage::new(options.width, options.height, estimate.hmd),
-        aovs: estimate.aovs,
-        report,
-    })
+    let outputs = estimators
+        .iter()
+        .zip(estimates)
+        .map(|(estimator, (estimate, estimate_seconds))| {
+            let report = RenderReport {
+                hmdist_version: env!("CARGO_PKG_VERSION").into(),
+                method: estimator.method().into(),
+                scene: scene.name.clone(),
+                width: options.width,
+                height: options.height,
+                seed: options.seed,
+                threads: rayon::current_num_threads(),
+                kernel: kernel.name().into(),
+                bvh: bvh.name().into(),
+                max_distance: options.max_distance,
+                triangles: scene.mesh.triangle_count(),
+                l_diag,
+                d_min: context.clamp.min,
+                bounds: BoundsReport {
+                    min: bounds.min.to_array(),
+                    max: bounds.max.to_array(),
+                },
+                camera: CameraReport {
+                    eye: camera.eye.to_array(),
+                    target: camera.target.to_array(),
+                    up: camera.up.to_array(),
+                    fov_y_deg: camera.fov_y_deg,
+                },
+                light: scene.light.map(|l| LightReport {
+                    position: l.position.to_array(),
+                    direction: l.direction.to_array(),
+                    cone_half_angle_deg: l.cone_half_angle_deg,
+                }),
+                display_scale: scene.display_scale,
+                background_pixels: background,
+                rays_cast: estimate.rays.map(|r| r.cast),
+                escaped_rays: estimate.rays.map(|r| r.escaped),
+                mrays_per_s: estimate.rays.map(|r| r.cast as f64 / r.seconds.max(1e-9) / 1e6),
+                seconds: Seconds {
+                    load: 0.0,
+                    accel_build,
+                    primary,
+                    estimate: estimate_seconds,
+                    // The shared set-up (BVH, primary rays) and this output's own estimate.
+                    total: setup + estimate_seconds,
+                    phases: estimate.phases,
+                },
+                channels: std::iter::once("Y")
+                    .chain(options.aovs.iter().map(|a| a.name()))
+                    .map(String::from)
+                    .collect(),
+                shard: shard.map(|s| ShardReport {
+                    index: s.index,
+                    count: s.count,
+                    fingerprint: crate::shard::fingerprint(scene, *estimator, options),
+                }),
+                shards: None,
+                parameters: estimator.parameters(),
+                details: estimate.details,
+            };
+            Rendered {
+                image: HmdImage::new(options.width, options.height, estimate.hmd),
+                aovs: estimate.aovs,
+                report,
+            }
+        });
+    Ok(outputs.collect())
 }
 
 /// H per pixel of `gbuffer` by `estimator`: its preparation, then the driver's pixel loop (or

@@ -294,6 +294,10 @@ pub struct Details {
     /// `photon1` and `photon2`.
     #[serde(flatten)]
     pub photon: Option<PhotonDetails>,
+    /// How `seconds.estimate` was measured, where not by timing this image alone (one
+    /// output of a multi-output pass).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub timed_as: Option<String>,
 }
 
 /// The backend a method ran on.

@@ -186,3 +186,52 @@ fn gpu_backend_gives_exact_distances_and_agrees_with_cpu_on_cube() {
     assert_eq!(d.excluded, 0);
     assert!(d.value < 0.01, "{}", d.value);
 }
+
+#[test]
+fn one_pass_over_several_ray_counts_gives_each_the_image_and_counts_of_its_own_render() {
+    let scene = Scene::load("cube").unwrap();
+    let cubemaps: Vec<Cubemap> = [32, 256, 1024, 4096]
+        .map(|n| Cubemap::new(Gather::new(n, Weighting::Cosine).unwrap(), 16, Backend::Cpu).unwrap())
+        .into();
+    let group: Vec<&Cubemap> = cubemaps.iter().collect();
+    let estimators: Vec<&dyn Estimator> = cubemaps.iter().map(|c| c as &dyn Estimator).collect();
+    let options = RenderOptions {
+        width: 40,
+        height: 30,
+        seed: 7,
+        ..RenderOptions::default()
+    };
+    let swept = hmdist::render::render_outputs(&scene, &estimators, &options, |context, gbuffer| {
+        hmdist::estimators::cubemap::sweep(&group, context, gbuffer, &Silent)
+    })
+    .unwrap();
+    assert_eq!(swept.len(), cubemaps.len());
+    let mut filled = vec![];
+    for (cubemap, out) in cubemaps.iter().zip(&swept) {
+        let alone = render(&scene, cubemap as &dyn Estimator, &options, &Silent).unwrap();
+        let bits = |image: &HmdImage| image.data.iter().map(|h| h.to_bits()).collect::<Vec<_>>();
+        assert_eq!(
+            bits(&out.image),
+            bits(&alone.image),
+            "N = {}",
+            cubemap.gather().rays_per_point()
+        );
+        let (a, b) = (&out.report, &alone.report);
+        assert_eq!((a.rays_cast, a.escaped_rays), (b.rays_cast, b.escaped_rays));
+        let counts = |r: &RenderReport| {
+            let c = r.details.cubemap.as_ref().unwrap();
+            (c.texels_rasterised, c.lookups, c.escaped_lookups)
+        };
+        assert_eq!(counts(a), counts(b));
+        assert!(a
+            .details
+            .timed_as
+            .as_ref()
+            .unwrap()
+            .contains("32, 256, 1024, 4096"));
+        assert!(a.seconds.estimate > 0.0);
+        filled.push(counts(a).0);
+    }
+    // A larger N looks up more texels of the one hemicube (R = 16: 3,072 texels).
+    assert!(filled.windows(2).all(|w| w[0] < w[1]), "{filled:?}");
+}

@@ -141,6 +141,11 @@ impl MethodConfig {
         Gather::new(self.rays, self.weighting)
     }
 
+    /// The cube map this configuration names (what `build("cubemap", ..)` boxes).
+    pub fn cubemap(&self) -> Result<Cubemap> {
+        Cubemap::new(self.gather()?, self.cube_res, self.backend)
+    }
+
     /// Method `method` with this configuration's photon parameters, over its `photon_map`
     /// file where it names one.
     pub fn photon_estimator(&self, method: PhotonMethod) -> Result<PhotonEstimator> {
@@ -206,7 +211,7 @@ pub const METHODS: &[MethodEntry] = &[
         name: "cubemap",
         summary: "Hemicube rasterisation, looked up with gather's directions (SPEC §3.2)",
         parameters: &["rays", "weighting", "cube_res", "backend"],
-        build: |c| Ok(Box::new(Cubemap::new(c.gather()?, c.cube_res, c.backend)?)),
+        build: |c| Ok(Box::new(c.cubemap()?)),
     },
     MethodEntry {
         name: "photon1",

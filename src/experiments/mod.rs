@@ -253,6 +253,8 @@ pub struct Runner<'a> {
     pub timings: Vec<(String, f64)>,
     /// Images of at least this many rays are rendered in parts ([`PART_RAYS`]).
     part_rays: u64,
+    /// The experiments this run runs.
+    running: Vec<&'static str>,
 }
 
 /// A plan in the making ([`plan`]): every image the experiments ask for is looked up in the
@@ -305,6 +307,7 @@ impl<'a> Runner<'a> {
             planned: None,
             timings: vec![],
             part_rays: PART_RAYS,
+            running: vec![],
         })
     }
 
@@ -323,6 +326,12 @@ impl<'a> Runner<'a> {
             calibration_failed: Cell::new(false),
         });
         Ok(self)
+    }
+
+    /// Whether this run runs experiment `name` (an image it needs may then be made together
+    /// with another experiment's).
+    pub fn runs(&self, name: &str) -> bool {
+        self.running.contains(&name)
     }
 
     /// Whether this run only makes a plan.
@@ -386,6 +395,7 @@ impl<'a> Runner<'a> {
     /// only renders its share of the images, and a plan only calibrates (see [`plan`]).
     pub fn run(&mut self, name: &str) -> Result<()> {
         let experiments = select(name)?;
+        self.running = experiments.iter().map(|e| e.name).collect();
         for experiment in &experiments {
             if let Some(plan) = &self.plan {
                 plan.experiment.set(experiment.name);
@@ -509,17 +519,7 @@ impl<'a> Runner<'a> {
     ) -> Result<(HmdImage, RenderReport, Vec<HmdImage>)> {
         crate::interrupt::check()?;
         let size = self.params.size;
-        let parameters = serde_json::to_string(&estimator.parameters()).expect("parameters serialise");
-        let mut key = format!(
-            "{}|{}|{parameters}|{size}x{size}|{seed}|{:?}",
-            self.scene_key,
-            estimator.method(),
-            self.backend,
-        );
-        for aov in aovs {
-            key += &format!("|{}", aov.name());
-        }
-        let stem = format!("{}-{:016x}", estimator.method(), stable_hash(key.as_bytes()));
+        let stem = self.stem(estimator, seed, aovs);
         let (exr_path, json_path) = (
             self.cache.join(format!("{stem}.exr")),
             self.cache.join(format!("{stem}.json")),
@@ -558,12 +558,7 @@ impl<'a> Runner<'a> {
         if let Some((s, _)) = request {
             s.rendered.set(s.rendered.get() + 1);
         }
-        write_atomically(
-            &exr_path,
-            &exr::encode(&rendered.image, &rendered.aovs, &exr_path)?,
-        )?;
-        // The JSON last: an image counts as cached only once both files are in place.
-        write_atomically(&json_path, rendered.report.to_json().as_bytes())?;
+        self.cache_image(&stem, &rendered)?;
         self.progress.advance(1);
         let channels = rendered
             .aovs
@@ -603,65 +598,249 @@ impl<'a> Runner<'a> {
             .count() as u32
     }
 
-    /// Renders the image `stem` with `options`: whole, or (see [`Runner::parts`]) as row
-    /// shards, each cached as soon as it is done (an interrupted run keeps the parts it
-    /// finished, and the next one renders only the others), then merged (bit for bit the
-    /// whole image: [`crate::shard::merge`]) and the parts removed.
+    /// Renders the image `stem` with `options`: see [`Runner::render_outputs_in_parts`].
     fn render_in_parts(
         &self,
         estimator: &dyn Estimator,
         options: &RenderOptions,
         stem: &str,
     ) -> Result<crate::render::Rendered> {
-        let count = self.parts(estimator);
+        let pass =
+            |options: &RenderOptions| render(&self.scene, estimator, options, &Silent).map(|r| vec![r]);
+        let mut rendered = self.render_outputs_in_parts(&[estimator], &[stem.to_string()], options, &pass)?;
+        Ok(rendered.remove(0))
+    }
+
+    /// Renders the images `stems` of `estimators` with `options` by `pass`: whole, or (see
+    /// [`Runner::parts`]: the estimator that casts the most decides) as row shards, each
+    /// shard's images cached as soon as they are done (an interrupted run keeps the parts it
+    /// finished, and the next one renders only the others), then merged (bit for bit the
+    /// whole images: [`crate::shard::merge`]) and the parts removed.
+    fn render_outputs_in_parts(
+        &self,
+        estimators: &[&dyn Estimator],
+        stems: &[String],
+        options: &RenderOptions,
+        pass: &dyn Fn(&RenderOptions) -> Result<Vec<crate::render::Rendered>>,
+    ) -> Result<Vec<crate::render::Rendered>> {
+        let count = estimators.iter().map(|e| self.parts(*e)).max().unwrap_or(1);
         if count == 1 {
-            return render(&self.scene, estimator, options, &Silent);
+            return pass(options);
         }
-        let mut parts = vec![];
+        let mut parts: Vec<Vec<crate::shard::Part>> = stems.iter().map(|_| vec![]).collect();
         let mut files = vec![];
         for k in 0..count {
-            let part = Self::part_stem(stem, k, count);
-            let (exr_path, json_path) = (
-                self.cache.join(format!("{part}.exr")),
-                self.cache.join(format!("{part}.json")),
-            );
-            let (image, report, aovs) = match read_cached(&exr_path, &json_path, &options.aovs) {
+            let paths: Vec<(PathBuf, PathBuf)> = stems
+                .iter()
+                .map(|stem| {
+                    let part = Self::part_stem(stem, k, count);
+                    (
+                        self.cache.join(format!("{part}.exr")),
+                        self.cache.join(format!("{part}.json")),
+                    )
+                })
+                .collect();
+            let cached: Option<Vec<_>> = paths
+                .iter()
+                .map(|(exr_path, json_path)| read_cached(exr_path, json_path, &options.aovs))
+                .collect();
+            let outputs = match cached {
                 Some(cached) => cached,
                 None => {
                     let options = RenderOptions {
                         shard: Some(Shard::new(k, count)?),
                         ..options.clone()
                     };
-                    let rendered = render(&self.scene, estimator, &options, &Silent)?;
-                    let bytes = exr::encode(&rendered.image, &rendered.aovs, &exr_path)?;
-                    write_atomically(&exr_path, &bytes)?;
-                    write_atomically(&json_path, rendered.report.to_json().as_bytes())?;
-                    let (width, height) = (options.width, options.height);
-                    let aovs = rendered
-                        .aovs
-                        .into_iter()
-                        .map(|a| HmdImage::new(width, height, a.data));
-                    (rendered.image, rendered.report, aovs.collect())
+                    let mut outputs = vec![];
+                    for (rendered, (exr_path, json_path)) in pass(&options)?.into_iter().zip(&paths) {
+                        let bytes = exr::encode(&rendered.image, &rendered.aovs, exr_path)?;
+                        write_atomically(exr_path, &bytes)?;
+                        write_atomically(json_path, rendered.report.to_json().as_bytes())?;
+                        let (width, height) = (options.width, options.height);
+                        let aovs = rendered
+                            .aovs
+                            .into_iter()
+                            .map(|a| HmdImage::new(width, height, a.data));
+                        outputs.push((rendered.image, rendered.report, aovs.collect()));
+                    }
+                    outputs
                 }
             };
-            let aovs = options
-                .aovs
-                .iter()
-                .zip(aovs)
-                .map(|(&aov, image)| AovImage {
-                    aov,
-                    data: image.data,
-                })
-                .collect();
-            parts.push(crate::shard::Part { image, aovs, report });
-            files.extend([exr_path, json_path]);
+            for ((image, report, aovs), output) in outputs.into_iter().zip(&mut parts) {
+                let aovs = options
+                    .aovs
+                    .iter()
+                    .zip(aovs)
+                    .map(|(&aov, image)| AovImage {
+                        aov,
+                        data: image.data,
+                    })
+                    .collect();
+                output.push(crate::shard::Part { image, aovs, report });
+            }
+            files.extend(paths.into_iter().flat_map(|(exr, json)| [exr, json]));
         }
-        let merged = crate::shard::merge(parts)?;
+        let merged = parts
+            .into_iter()
+            .map(crate::shard::merge)
+            .collect::<Result<Vec<_>>>()?;
         for file in files {
-            // The whole image is written next; a part left behind only costs disk.
+            // The whole images are written next; a part left behind only costs disk.
             let _ = std::fs::remove_file(file);
         }
         Ok(merged)
+    }
+
+    /// The cache stem of the image `estimator` renders with `seed` and `aovs` at the preset's
+    /// size: a hash of everything that determines it.
+    fn stem(&self, estimator: &dyn Estimator, seed: u64, aovs: &[Aov]) -> String {
+        let size = self.params.size;
+        let parameters = serde_json::to_string(&estimator.parameters()).expect("parameters serialise");
+        let mut key = format!(
+            "{}|{}|{parameters}|{size}x{size}|{seed}|{:?}",
+            self.scene_key,
+            estimator.method(),
+            self.backend,
+        );
+        for aov in aovs {
+            key += &format!("|{}", aov.name());
+        }
+        format!("{}-{:016x}", estimator.method(), stable_hash(key.as_bytes()))
+    }
+
+    /// Writes a rendered image and its report into the cache as `stem`: the JSON last, so
+    /// that an image counts as cached only once both files are in place.
+    fn cache_image(&self, stem: &str, rendered: &crate::render::Rendered) -> Result<()> {
+        let (exr_path, json_path) = (
+            self.cache.join(format!("{stem}.exr")),
+            self.cache.join(format!("{stem}.json")),
+        );
+        write_atomically(
+            &exr_path,
+            &exr::encode(&rendered.image, &rendered.aovs, &exr_path)?,
+        )?;
+        write_atomically(&json_path, rendered.report.to_json().as_bytes())
+    }
+
+    /// Makes the cube maps `configs` (one resolution; seed `seed`) that are not cached in one
+    /// multi-output pass ([`crate::estimators::cubemap::sweep`]: each pixel's hemicube filled
+    /// once for all of them, each image bit for bit its own render's), so that asking for
+    /// each afterwards finds it cached; in a plan, calibrates that pass. Only on the CPU
+    /// backend, and not in a shard (there each image is rendered alone, when asked for).
+    pub fn cubemap_sweep(&self, configs: &[MethodConfig], seed: u64) -> Result<()> {
+        crate::interrupt::check()?;
+        if self.shard.is_some() {
+            return Ok(());
+        }
+        let mut cubemaps = vec![];
+        for config in configs {
+            let cubemap = MethodConfig {
+                backend: self.backend,
+                ..config.clone()
+            }
+            .cubemap()?;
+            let stem = self.stem(&cubemap, seed, &[]);
+            let json = self.cache.join(format!("{stem}.json"));
+            let known = self
+                .plan
+                .as_ref()
+                .is_some_and(|p| p.items.borrow().iter().any(|i| i.cache.as_ref() == Some(&stem)));
+            if !json.exists() && !known && cubemap.runs_on_cpu() {
+                cubemaps.push((cubemap, stem));
+            }
+        }
+        if cubemaps.len() < 2 {
+            return Ok(());
+        }
+        let size = self.params.size;
+        let options = RenderOptions {
+            width: size,
+            height: size,
+            seed,
+            ..RenderOptions::default()
+        };
+        let group: Vec<&crate::estimators::Cubemap> = cubemaps.iter().map(|(c, _)| c).collect();
+        let estimators: Vec<&dyn Estimator> = cubemaps.iter().map(|(c, _)| c as &dyn Estimator).collect();
+        let stems: Vec<String> = cubemaps.iter().map(|(_, s)| s.clone()).collect();
+        let pass = |options: &RenderOptions| {
+            crate::render::render_outputs(&self.scene, &estimators, options, |context, gbuffer| {
+                crate::estimators::cubemap::sweep(&group, context, gbuffer, &Silent)
+            })
+        };
+        if let Some(plan) = &self.plan {
+            return self.plan_sweep(plan, &estimators, &stems, seed, &pass);
+        }
+        let rendered = self.render_outputs_in_parts(&estimators, &stems, &options, &pass)?;
+        for (stem, rendered) in stems.iter().zip(&rendered) {
+            self.cache_image(stem, rendered)?;
+            self.progress.advance(1);
+        }
+        Ok(())
+    }
+
+    /// For a plan: calibrates a multi-output pass over `estimators` (images `stems`) and
+    /// records each image at its share: its own estimate's seconds, scaled, and the first
+    /// one also the shared set-up.
+    fn plan_sweep(
+        &self,
+        plan: &PlanRun,
+        estimators: &[&dyn Estimator],
+        stems: &[String],
+        seed: u64,
+        pass: &dyn Fn(&RenderOptions) -> Result<Vec<crate::render::Rendered>>,
+    ) -> Result<()> {
+        let size = self.params.size;
+        let (shard, scale) = plan::calibration_shard(size);
+        let options = RenderOptions {
+            width: size,
+            height: size,
+            seed,
+            shard: Some(shard),
+            ..RenderOptions::default()
+        };
+        let start = Instant::now();
+        let calibration = pass(&options).inspect_err(|_| plan.calibration_failed.set(true))?;
+        let spent = plan.calibration_seconds.get() + start.elapsed().as_secs_f64();
+        plan.calibration_seconds.set(spent);
+        let parts = estimators.iter().map(|e| self.parts(*e)).max().unwrap_or(1);
+        for (i, ((estimator, stem), rendered)) in estimators.iter().zip(stems).zip(&calibration).enumerate() {
+            let estimate = rendered.report.seconds.estimate;
+            let shared = if i == 0 {
+                plan::extrapolate(&rendered.report, scale) - estimate * scale
+            } else {
+                0.0
+            };
+            let cached_parts = (0..parts)
+                .filter(|&k| {
+                    let part = Self::part_stem(stem, k, parts);
+                    parts > 1 && self.cache.join(format!("{part}.json")).exists()
+                })
+                .count() as u32;
+            let (mut what, work) = plan::describe(
+                estimator.method(),
+                &estimator.parameters(),
+                seed,
+                size as u64 * size as u64,
+            );
+            what += " (one output of a multi-output cube-map pass";
+            what += &if parts > 1 {
+                format!("; {cached_parts} of {parts} parts cached)")
+            } else {
+                ")".to_string()
+            };
+            let left = (parts - cached_parts) as f64 / parts as f64;
+            plan.items.borrow_mut().push(plan::PlanItem {
+                experiment: plan.experiment.get().into(),
+                also_needed_by: vec![],
+                what,
+                work,
+                cache: Some(stem.clone()),
+                cached: false,
+                seconds: (shared + estimate * scale) * left,
+            });
+            self.progress.advance(1);
+        }
+        Ok(())
     }
 
     /// An image of the preset's size standing in for one this run does not render.

@@ -56,9 +56,26 @@ pub(super) fn reference(runner: &Runner) -> Result<HmdImage> {
     Ok(runner.method_image("gather", &config, REFERENCE_SEED)?.0)
 }
 
+/// The cube maps of the preset's resolution that the ray studies of this run need: Table 1's,
+/// one per ray count, and, where the run includes Fig. 9 at that resolution, Fig. 9's at the
+/// reference's ray count. They share each pixel's hemicube: [`Runner::cubemap_sweep`] makes
+/// them in one pass.
+fn cubemap_group(runner: &Runner) -> Vec<MethodConfig> {
+    let p = &runner.params;
+    let mut group: Vec<MethodConfig> = p.rays.iter().map(|&rays| rays_config(runner, rays)).collect();
+    let fig9_res = paper::CPU_VS_GPU_AT_65536
+        .iter()
+        .any(|c| c.cube_res == p.cube_res);
+    if runner.runs("fig9") && fig9_res {
+        group.push(rays_config(runner, p.reference_rays));
+    }
+    group
+}
+
 /// Renders the reference and, for each ray count, gather and the cube map.
 fn ray_sweep(runner: &Runner) -> Result<RaySweep> {
     let reference = reference(runner)?;
+    runner.cubemap_sweep(&cubemap_group(runner), 1)?;
     let l_diag = runner.scene.diagonal();
     let (mut rows, mut gathered, mut excluded) = (vec![], vec![], 0);
     let mut cubemap_backend = String::new();

@@ -18,6 +18,7 @@ use super::{EstimateContext, Estimator, GBuffer, Gather, Work};
 use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::report::{CubemapParameters, Parameters};
+pub use cpu::sweep;
 pub use hemicube::{Face, Hemicube};
 
 /// Default per-quadrant resolution `R` (paper: 64 and 128).
@@ -66,9 +67,27 @@ impl Cubemap {
         })
     }
 
+    /// The gather whose directions look the hemicube up.
+    pub fn gather(&self) -> &Gather {
+        &self.gather
+    }
+
     /// The hemicube every pixel gets.
     pub fn hemicube(&self) -> Hemicube {
         self.hemicube
+    }
+
+    /// Whether this cube map is built on the CPU (where [`sweep`] runs): `cpu`, or `auto`
+    /// without a hardware GPU.
+    pub fn runs_on_cpu(&self) -> bool {
+        match self.backend {
+            Backend::Cpu => true,
+            Backend::Gpu => false,
+            #[cfg(feature = "gpu")]
+            Backend::Auto => !crate::gpu::hardware_adapter(),
+            #[cfg(not(feature = "gpu"))]
+            Backend::Auto => true,
+        }
     }
 
     /// The GPU to rasterise with, or `None` for the CPU backend.
