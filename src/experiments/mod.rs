@@ -779,8 +779,9 @@ impl<'a> Runner<'a> {
     }
 
     /// For a plan: calibrates a multi-output pass over `estimators` (images `stems`) and
-    /// records each image at its share: its own estimate's seconds, scaled, and the first
-    /// one also the shared set-up.
+    /// records each image at its share of the pass's seconds (the BVH build once, the rest
+    /// scaled to the whole image), in proportion to its own timing (its texels and lookups:
+    /// shared texels count in every output's timing, but are filled once).
     fn plan_sweep(
         &self,
         plan: &PlanRun,
@@ -800,15 +801,18 @@ impl<'a> Runner<'a> {
         };
         let start = Instant::now();
         let calibration = pass(&options).inspect_err(|_| plan.calibration_failed.set(true))?;
-        let spent = plan.calibration_seconds.get() + start.elapsed().as_secs_f64();
-        plan.calibration_seconds.set(spent);
+        let wall = start.elapsed().as_secs_f64();
+        plan.calibration_seconds
+            .set(plan.calibration_seconds.get() + wall);
+        let accel_build = calibration.first().map_or(0.0, |r| r.report.seconds.accel_build);
+        let pass_seconds = accel_build + (wall - accel_build).max(0.0) * scale;
+        let timed: f64 = calibration.iter().map(|r| r.report.seconds.estimate).sum();
         let parts = estimators.iter().map(|e| self.parts(*e)).max().unwrap_or(1);
-        for (i, ((estimator, stem), rendered)) in estimators.iter().zip(stems).zip(&calibration).enumerate() {
-            let estimate = rendered.report.seconds.estimate;
-            let shared = if i == 0 {
-                plan::extrapolate(&rendered.report, scale) - estimate * scale
+        for ((estimator, stem), rendered) in estimators.iter().zip(stems).zip(&calibration) {
+            let share = if timed > 0.0 {
+                rendered.report.seconds.estimate / timed
             } else {
-                0.0
+                1.0 / calibration.len() as f64
             };
             let cached_parts = (0..parts)
                 .filter(|&k| {
@@ -836,7 +840,7 @@ impl<'a> Runner<'a> {
                 work,
                 cache: Some(stem.clone()),
                 cached: false,
-                seconds: (shared + estimate * scale) * left,
+                seconds: pass_seconds * share * left,
             });
             self.progress.advance(1);
         }

@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# The paper's `cube` reproduction at its own scale on a GPU machine (issue #22): gather and the
+# cube map on the GPU, the photon studies on the CPU side. Prints the GPU's name, the plan
+# (every image, each once, with its estimated seconds), then each experiment's seconds, and
+# writes the tables, plots, picture grids and index.html into OUT.
+#
+#   docs/paper-scale/gpu.sh [OUT]        # default: $OUT/paper-cube on the device machine,
+#                                        # else /tmp/paper-cube
+#
+# Written to fit the device machine's budget (one H100/H200 and 16 cores, under 8 minutes):
+# the run stops cleanly after LIMIT seconds (default 420) and keeps the images it finished in
+# OUT/cache (large ones in parts), so running the script again continues where it stopped;
+# the run that finishes writes the report, and each experiment's planned and actual seconds
+# (OUT/plan_vs_actual.md). HMDIST_BIN names a prebuilt binary (the device machine may have no
+# Rust toolchain or crates); otherwise the script builds one.
+#
+# Not yet run: no GPU machine has been lent to a session since it was written.
+set -uo pipefail
+cd "$(dirname "$0")/../.."
+out="${1:-${OUT:-/tmp}/paper-cube}"
+limit="${LIMIT:-420}"
+bin="${HMDIST_BIN:-target/release/hmdist}"
+if [ ! -x "$bin" ]; then
+    cargo build --release -q || exit 2
+fi
+echo "GPU: $(nvidia-smi --query-gpu=name,memory.total --format=csv,noheader 2>/dev/null || echo none found)"
+echo "CPU: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | xargs), $(nproc) cores"
+echo "hmdist: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)"
+common=(--scene cube --preset paper --backend gpu --out "$out" --quiet)
+
+# The plan first: a calibration of a few rows of every image (a few percent of the run).
+start=$(date +%s)
+timeout -s INT 120 "$bin" experiment all "${common[@]}" --plan && sed -n 1,16p "$out/plan.md"
+left=$((limit - ($(date +%s) - start)))
+timeout -s INT "$left" "$bin" experiment all "${common[@]}"
+status=$?
+echo "wall: $(($(date +%s) - start)) s"
+if [ "$status" -eq 0 ]; then
+    cat "$out/plan_vs_actual.md"
+    echo "report: $out/index.html"
+else
+    echo "stopped (status $status) after the images in $out/cache: run the script again to continue"
+    exit 1
+fi
