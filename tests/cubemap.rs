@@ -234,4 +234,21 @@ fn one_pass_over_several_ray_counts_gives_each_the_image_and_counts_of_its_own_r
     }
     // A larger N looks up more texels of the one hemicube (R = 16: 3,072 texels).
     assert!(filled.windows(2).all(|w| w[0] < w[1]), "{filled:?}");
+    // Independently: a pixel fills each distinct texel its directions fall in, once.
+    let accel = hmdist::accel::Accel::build(&scene.mesh, hmdist::accel::BuildQuality::Fast);
+    let gbuffer = hmdist::render::primary_hits(&accel, &scene, options.width, options.height);
+    for (cubemap, filled) in cubemaps.iter().zip(filled) {
+        let expected: u64 = (0..gbuffer.points.len())
+            .filter(|&pixel| gbuffer.points[pixel].is_some())
+            .map(|pixel| {
+                let texels: std::collections::HashSet<usize> = cubemap
+                    .gather()
+                    .directions(options.seed, pixel as u64)
+                    .map(|w| cubemap.hemicube().lookup(w).1)
+                    .collect();
+                texels.len() as u64
+            })
+            .sum();
+        assert_eq!(filled, expected, "N = {}", cubemap.gather().rays_per_point());
+    }
 }
