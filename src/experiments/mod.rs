@@ -584,9 +584,9 @@ impl<'a> Runner<'a> {
         format!("{stem}.part-{k}-of-{parts}")
     }
 
-    /// Of the parts of the image `stem` that `estimator` renders, those already cached.
-    fn parts_cached(&self, estimator: &dyn Estimator, stem: &str) -> u32 {
-        let parts = self.parts(estimator);
+    /// Of the `parts` parts of the image `stem`, those already cached (none for a whole
+    /// image).
+    fn parts_cached(&self, stem: &str, parts: u32) -> u32 {
         if parts == 1 {
             return 0;
         }
@@ -814,12 +814,7 @@ impl<'a> Runner<'a> {
             } else {
                 1.0 / calibration.len() as f64
             };
-            let cached_parts = (0..parts)
-                .filter(|&k| {
-                    let part = Self::part_stem(stem, k, parts);
-                    parts > 1 && self.cache.join(format!("{part}.json")).exists()
-                })
-                .count() as u32;
+            let cached_parts = self.parts_cached(stem, parts);
             let (mut what, work) = plan::describe(
                 estimator.method(),
                 &estimator.parameters(),
@@ -886,7 +881,8 @@ impl<'a> Runner<'a> {
             seed,
             size as u64 * size as u64,
         );
-        let (parts, parts_cached) = (self.parts(estimator), self.parts_cached(estimator, &stem));
+        let parts = self.parts(estimator);
+        let parts_cached = self.parts_cached(&stem, parts);
         if parts > 1 {
             what += &format!(" ({parts_cached} of {parts} parts cached)");
         }
