@@ -201,6 +201,52 @@ pub fn merge(parts: Vec<Part>) -> Result<Rendered> {
         cubemap.lookups = count(|c| c.lookups);
         cubemap.escaped_lookups = count(|c| c.escaped_lookups);
     }
+    if let Some(photon) = &mut report.details.photon {
+        photon.holes = parts
+            .iter()
+            .map(|p| p.report.details.photon.as_ref().map_or(0, |d| d.holes))
+            .sum();
+        // Queries per second of the whole gather: each part's queries over all its seconds.
+        let (queries, gather_seconds) = parts
+            .iter()
+            .filter_map(|p| Some((p.report.details.photon.as_ref()?, p.report.seconds.phases.gather?)))
+            .fold((0.0, 0.0), |(q, s), (d, g)| {
+                (q + d.gather_queries_per_s * g, s + g)
+            });
+        if gather_seconds > 0.0 {
+            photon.gather_queries_per_s = queries / gather_seconds;
+        }
+    }
+    // Means over the image's surface pixels, not shard 0's.
+    let surface: Vec<f64> = parts
+        .iter()
+        .enumerate()
+        .map(|(index, p)| {
+            let rows = (0..height)
+                .filter(|r| r % reference.count == index as u32)
+                .count() as u64;
+            (rows * width as u64).saturating_sub(p.report.background_pixels as u64) as f64
+        })
+        .collect();
+    report.details.mean_rays_per_pixel = parts
+        .iter()
+        .zip(&surface)
+        .map(|(p, surface)| Some(p.report.details.mean_rays_per_pixel? * surface))
+        .sum::<Option<f64>>()
+        .map(|rays| rays / surface.iter().sum::<f64>().max(1.0));
+    // What must be the same in every part to be the image's; where it is not, null.
+    let agreed = |f: fn(&RenderReport) -> String| parts.iter().all(|p| f(&p.report) == f(&parts[0].report));
+    if !agreed(|r| format!("{:?}", r.details.device)) {
+        report.details.device = None;
+    }
+    if !agreed(|r| format!("{:?}", r.details.ao_radius.map(f32::to_bits))) {
+        report.details.ao_radius = None;
+    }
+    report.details.grays_per_s = report
+        .rays_cast
+        .zip(report.seconds.phases.gpu_trace)
+        .filter(|_| report.details.grays_per_s.is_some())
+        .map(|(rays, seconds)| rays as f64 / seconds.max(1e-9) / 1e9);
     let ray_seconds: f64 = parts.iter().map(|p| p.report.seconds.estimate).sum();
     report.mrays_per_s = report.rays_cast.map(|r| r as f64 / ray_seconds.max(1e-9) / 1e6);
     report.shard = None;

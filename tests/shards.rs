@@ -80,6 +80,93 @@ fn four_shards_merged_in_any_order_give_the_one_machine_exr_byte_for_byte() {
     }
 }
 
+/// Merges `part0..3.exr` into `merged.exr` and returns its JSON with the one-machine JSON.
+fn merged_and_one(dir: &Scratch) -> (serde_json::Value, serde_json::Value) {
+    hmdist_ok(
+        dir.path(),
+        &[
+            "merge",
+            "--quiet",
+            "merged.exr",
+            "part0.exr",
+            "part1.exr",
+            "part2.exr",
+            "part3.exr",
+        ],
+    );
+    (
+        common::cli::read_json(&dir.join("merged.json")),
+        common::cli::read_json(&dir.join("one.json")),
+    )
+}
+
+#[test]
+fn a_merged_report_counts_the_whole_image_not_shard_0_and_draws_the_png_at_the_parts_scale() {
+    // Photon holes sum over the shards (a small radius leaves many).
+    let dir = Scratch::new("shards-holes");
+    whole_and_shards(
+        &dir,
+        &[
+            "--size",
+            "40x27",
+            "--method",
+            "photon1",
+            "--photons",
+            "2000",
+            "--gather",
+            "16",
+            "--max-radius",
+            "0.02",
+        ],
+    );
+    let (merged, one) = merged_and_one(&dir);
+    let part = common::cli::read_json(&dir.join("part0.json"));
+    assert!(
+        one["holes"].as_u64().unwrap() > part["holes"].as_u64().unwrap(),
+        "{one}"
+    );
+    assert_eq!(merged["holes"], one["holes"]);
+    assert!(merged["gather_queries_per_s"].as_f64().unwrap() > 0.0);
+
+    // Adaptive's mean rays per pixel is the image's mean.
+    let dir = Scratch::new("shards-adaptive");
+    whole_and_shards(
+        &dir,
+        &[
+            "--size",
+            "40x27",
+            "--method",
+            "adaptive",
+            "--rays",
+            "16",
+            "--max-rays",
+            "256",
+            "--tolerance",
+            "0.05",
+        ],
+    );
+    let (merged, one) = merged_and_one(&dir);
+    let (merged, one) = (
+        merged["mean_rays_per_pixel"].as_f64().unwrap(),
+        one["mean_rays_per_pixel"].as_f64().unwrap(),
+    );
+    assert!(
+        (merged - one).abs() <= 1e-9 * one,
+        "merged {merged}, one machine {one}"
+    );
+
+    // The merged PNG is drawn at the parts' --scale, as the one-machine PNG is.
+    let dir = Scratch::new("shards-scale");
+    whole_and_shards(&dir, &["--size", "40x27", "--rays", "16", "--scale", "0.5"]);
+    let (merged, one) = merged_and_one(&dir);
+    assert_eq!(one["display_scale"].as_f64(), Some(0.5));
+    assert_eq!(merged["display_scale"], one["display_scale"]);
+    assert!(
+        bytes(&dir, "merged.png") == bytes(&dir, "one.png"),
+        "merged PNG at another scale"
+    );
+}
+
 #[test]
 fn merge_refuses_a_missing_a_repeated_and_a_foreign_part_and_writes_nothing() {
     let dir = Scratch::new("shards-refused");

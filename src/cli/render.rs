@@ -120,7 +120,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let mut rendered = render(&scene, estimator.as_ref(), &options, &bar)?;
     rendered.report.add_load_seconds(load_seconds);
 
+    // The JSON records the PNG's scale, so that `merge` draws the merged PNG the same way.
     let scale = args.scale.unwrap_or(scene.display_scale);
+    rendered.report.display_scale = scale;
     let exr_bytes = exr::encode(&rendered.image, &rendered.aovs, &args.out)?;
     let png_bytes = picture::encode_png(&picture::grey(&rendered.image, scale), &png)?;
     let mut contents = vec![exr_bytes, png_bytes, rendered.report.to_json().into_bytes()];
