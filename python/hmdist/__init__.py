@@ -10,7 +10,9 @@ the points you choose.
 Conventions (as the Rust library's): distances in scene units; H is NaN for background
 pixels and +inf where every ray escaped; a point's normal says which side it is seen from.
 Bad arrays and parameters raise ValueError, unreadable files OSError, GPU failures
-hmdist.DeviceError. The GIL is released while hmdist works.
+hmdist.DeviceError. The GIL is released while hmdist works, and Ctrl-C stops a render, an
+`hmd_at` or a `cast` within a fraction of a second with KeyboardInterrupt. Points and vectors
+may be lists, tuples or numpy arrays (`Camera([0, 1, 2], np.zeros(3))`).
 """
 
 import numpy as np
@@ -78,14 +80,21 @@ class Scene:
         """Name, triangles, bounds, l_diag, camera, light and display scale."""
         return self._inner.info
 
-    def render(self, camera=None, method="gather", *, progress=False, **params):
+    def render(self, camera=None, method="gather", *, progress=False, aov=None, **params):
         """H per pixel (float32 [height, width]) and the report (a dict with the JSON
         sidecar's keys). `camera` defaults to the scene's own (then `size=(w, h)`, default
         1024 × 1024); `params` are `hmdist render`'s flags with underscores: rays, seed,
-        weighting, photons, gather, source, cube_res, backend, max_distance, threads, ..."""
+        weighting, photons, gather, source, cube_res, backend, max_distance, threads,
+        rounds, ao_radius, ... With `aov` (names: relerr, rays, dmin, ao, escaped) a third
+        value is returned: a dict of float32 [height, width] arrays by name.
+
+        Ctrl-C stops the render within a fraction of a second and raises KeyboardInterrupt;
+        the scene stays usable."""
         if camera is not None and not isinstance(camera, Camera):
             raise ValueError(f"camera must be a hmdist.Camera, not {type(camera).__name__}")
-        return self._inner.render(camera, method, params, bool(progress))
+        names = [] if aov is None else ([aov] if isinstance(aov, str) else [str(a) for a in aov])
+        image, report, aovs = self._inner.render(camera, method, params, bool(progress), names)
+        return (image, report) if aov is None else (image, report, aovs)
 
     def primary_hits(self, camera=None, size=(1024, 1024)):
         """Each pixel's first hit, row-major: a dict of `points`, `normals` (facing the

@@ -3,8 +3,14 @@
 //! of the right shape, releases the GIL while hmdist works, and turns hmdist's errors into
 //! Python exceptions: `ValueError` for bad parameters and scenes, `OSError` for files,
 //! `hmdist.DeviceError` for GPU failures.
+//!
+//! Ctrl-C: long work ([`interruptible`]) runs on a helper thread while the calling thread
+//! looks at Python's signals every [`SIGNAL_POLL`]; a `KeyboardInterrupt` (or any exception a
+//! signal handler raises) asks hmdist to stop ([`hmdist::interrupt`]), waits for the work to
+//! return, withdraws the request and raises it, so the next call runs normally.
 
 use std::sync::OnceLock;
+use std::time::Duration;
 
 use glam::Vec3;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -15,7 +21,7 @@ use pyo3::types::PyDict;
 
 use hmdist::accel::{Accel, BuildQuality, Kernel, RayCaster};
 use hmdist::error::Error;
-use hmdist::estimators::{registry, Gather, MethodConfig};
+use hmdist::estimators::{registry, Aov, Gather, MethodConfig};
 use hmdist::image::HmdImage;
 use hmdist::points::{hmd_at, PointQuery, SurfacePoint};
 use hmdist::progress::{Progress, Silent};
@@ -48,6 +54,60 @@ fn vectors(array: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<Vec3>> {
         .collect())
 }
 
+/// How often the calling thread looks at Python's signals while hmdist works.
+const SIGNAL_POLL: Duration = Duration::from_millis(25);
+
+/// Runs `work` without the GIL, stopping it on Ctrl-C (see the module docs): the work's result,
+/// or the exception a signal handler raised.
+fn interruptible<T: Send>(py: Python<'_>, work: impl FnOnce() -> T + Send) -> PyResult<T> {
+    std::thread::scope(|scope| {
+        let worker = scope.spawn(work);
+        let mut raised = None;
+        while !worker.is_finished() {
+            py.detach(|| std::thread::park_timeout(SIGNAL_POLL));
+            if raised.is_none() {
+                if let Err(error) = py.check_signals() {
+                    hmdist::interrupt::request();
+                    raised = Some(error);
+                }
+            }
+        }
+        let result = py
+            .detach(|| worker.join())
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        match raised {
+            Some(error) => {
+                hmdist::interrupt::clear();
+                Err(error)
+            }
+            None => Ok(result),
+        }
+    })
+}
+
+/// Any sequence or array of 3 numbers (a list, a tuple, a numpy array) as a vector.
+fn vec3(name: &str, value: &Bound<'_, PyAny>) -> PyResult<Vec3> {
+    let numbers = numbers(name, value, 3)?;
+    Ok(Vec3::new(numbers[0] as f32, numbers[1] as f32, numbers[2] as f32))
+}
+
+/// Any sequence or array of `count` numbers, or a `ValueError` naming `name`.
+fn numbers(name: &str, value: &Bound<'_, PyAny>, count: usize) -> PyResult<Vec<f64>> {
+    let bad = || {
+        let shown = value.repr().map_or_else(|_| "?".to_string(), |r| r.to_string());
+        value_error(format!("{name} must be {count} numbers, not {shown}"))
+    };
+    let items = value.try_iter().map_err(|_| bad())?;
+    let numbers = items
+        .map(|item| item?.extract::<f64>())
+        .collect::<PyResult<Vec<f64>>>()
+        .map_err(|_| bad())?;
+    if numbers.len() != count {
+        return Err(bad());
+    }
+    Ok(numbers)
+}
+
 /// A pinhole camera: where it is, what it looks at, and the image it takes.
 #[pyclass(name = "Camera", module = "hmdist._hmdist", from_py_object)]
 #[derive(Clone)]
@@ -58,21 +118,38 @@ struct PyCamera {
 
 #[pymethods]
 impl PyCamera {
+    /// `eye`, `target` and `up`: any 3 numbers (list, tuple, numpy array); `size`: any 2
+    /// positive integers (width, height).
     #[new]
-    #[pyo3(signature = (eye, target, up = (0.0, 1.0, 0.0), fov_y_deg = 60.0, size = (512, 512)))]
+    #[pyo3(signature = (eye, target, up = None, fov_y_deg = 60.0, size = None))]
     fn new(
-        eye: (f32, f32, f32),
-        target: (f32, f32, f32),
-        up: (f32, f32, f32),
+        eye: &Bound<'_, PyAny>,
+        target: &Bound<'_, PyAny>,
+        up: Option<&Bound<'_, PyAny>>,
         fov_y_deg: f32,
-        size: (u32, u32),
+        size: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let v = |t: (f32, f32, f32)| Vec3::new(t.0, t.1, t.2);
         let camera = Camera {
-            eye: v(eye),
-            target: v(target),
-            up: v(up),
+            eye: vec3("eye", eye)?,
+            target: vec3("target", target)?,
+            up: up.map_or(Ok(Vec3::Y), |up| vec3("up", up))?,
             fov_y_deg,
+        };
+        let size = match size {
+            None => (512, 512),
+            Some(size) => {
+                let wh = numbers("size", size, 2)?;
+                let whole =
+                    |v: f64| (v >= 1.0 && v <= u32::MAX as f64 && v.fract() == 0.0).then_some(v as u32);
+                match (whole(wh[0]), whole(wh[1])) {
+                    (Some(w), Some(h)) => (w, h),
+                    _ => {
+                        return Err(value_error(format!(
+                            "size must be two positive integers, not {wh:?}"
+                        )))
+                    }
+                }
+            }
         };
         if !(fov_y_deg > 0.0 && fov_y_deg < 180.0) {
             return Err(value_error(format!(
@@ -111,13 +188,14 @@ impl PyScene {
         })
     }
 
-    /// The BVH for `hmd_at` and `cast`, built at the first call.
-    fn accel(&self) -> PyResult<&Accel> {
+    /// The BVH for `hmd_at` and `cast`, built (without the GIL) at the first call.
+    fn accel(&self, py: Python<'_>) -> PyResult<&Accel> {
         if let Some(accel) = self.accel.get() {
             return Ok(accel);
         }
         let kernel = Kernel::from_env().map_err(py_error)?;
-        let accel = Accel::build(&self.scene.mesh, BuildQuality::Fast).with_kernel(kernel);
+        let mesh = &self.scene.mesh;
+        let accel = py.detach(|| Accel::build(mesh, BuildQuality::Fast).with_kernel(kernel));
         Ok(self.accel.get_or_init(|| accel))
     }
 }
@@ -143,25 +221,29 @@ impl PyScene {
     /// vertices); a camera framing them.
     #[staticmethod]
     fn from_arrays(
+        py: Python<'_>,
         vertices: PyReadonlyArray2<'_, f64>,
         faces: PyReadonlyArray2<'_, u64>,
         name: &str,
     ) -> PyResult<Self> {
         let positions = vectors(&vertices)?;
         let indices = faces.as_slice().map_err(|e| value_error(e.to_string()))?;
-        let mut mesh = Mesh::new();
-        mesh.add_vertices(positions.iter().copied());
-        for (i, f) in indices.chunks_exact(3).enumerate() {
-            if let Some(bad) = f.iter().find(|&&v| v >= positions.len() as u64) {
-                let message = format!(
-                    "faces[{i}] refers to vertex {bad}, but there are {}",
-                    positions.len()
-                );
-                return Err(value_error(message));
+        let mesh = py.detach(|| {
+            let mut mesh = Mesh::new();
+            mesh.add_vertices(positions.iter().copied());
+            for (i, f) in indices.chunks_exact(3).enumerate() {
+                if let Some(bad) = f.iter().find(|&&v| v >= positions.len() as u64) {
+                    let message = format!(
+                        "faces[{i}] refers to vertex {bad}, but there are {}",
+                        positions.len()
+                    );
+                    return Err(value_error(message));
+                }
+                mesh.add_triangle(f[0] as u32, f[1] as u32, f[2] as u32);
             }
-            mesh.add_triangle(f[0] as u32, f[1] as u32, f[2] as u32);
-        }
-        mesh.validate().map_err(py_error)?;
+            mesh.validate().map_err(py_error)?;
+            Ok(mesh)
+        })?;
         let bounds = mesh.bounds();
         PyScene::new(hmdist::scene::Scene {
             name: name.into(),
@@ -203,9 +285,10 @@ impl PyScene {
         Ok(info)
     }
 
-    /// H per pixel (float32 [height, width], NaN for background) and the report as a dict
-    /// with the JSON sidecar's keys. Parameters as `hmdist render`'s flags (`rays`,
-    /// `photons`, ...), passed by the Python wrapper as a dict.
+    /// H per pixel (float32 [height, width], NaN for background), the report as a dict
+    /// with the JSON sidecar's keys, and each AOV named in `aov` (float32 [height, width]) in a
+    /// dict by name. Parameters as `hmdist render`'s flags (`rays`, `photons`, ...), passed by
+    /// the Python wrapper as a dict.
     fn render<'py>(
         &mut self,
         py: Python<'py>,
@@ -213,9 +296,18 @@ impl PyScene {
         method: &str,
         params: &Bound<'py, PyDict>,
         progress: bool,
-    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        aov: Vec<String>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyDict>)> {
         let (config, mut options) = configure(params)?;
-        let estimator = registry::build(method, &config.for_aovs(&[])).map_err(py_error)?;
+        let mut aovs = Vec::new();
+        for name in &aov {
+            let aov = Aov::parse(name).map_err(py_error)?;
+            if !aovs.contains(&aov) {
+                aovs.push(aov);
+            }
+        }
+        options.aovs = aovs.clone();
+        let estimator = registry::build(method, &config.for_aovs(&aovs)).map_err(py_error)?;
         let original = self.scene.camera;
         if let Some(c) = &camera {
             self.scene.camera = c.camera;
@@ -223,13 +315,21 @@ impl PyScene {
         }
         let scene = &self.scene;
         let reporter: &dyn Progress = if progress { &Stderr } else { &Silent };
-        let result = py.detach(|| render(scene, estimator.as_ref(), &options, reporter));
+        let estimator = estimator.as_ref();
+        let result = interruptible(py, || render(scene, estimator, &options, reporter));
         self.scene.camera = original;
-        let rendered = result.map_err(py_error)?;
+        let rendered = result?.map_err(py_error)?;
         let (w, h) = (rendered.image.width as usize, rendered.image.height as usize);
         let image = PyArray1::from_vec(py, rendered.image.data).reshape([h, w])?;
         let report = json_to_py(py, &rendered.report.to_json())?;
-        Ok((image.into_any(), report))
+        let channels = PyDict::new(py);
+        for channel in rendered.aovs {
+            channels.set_item(
+                channel.aov.name(),
+                PyArray1::from_vec(py, channel.data).reshape([h, w])?,
+            )?;
+        }
+        Ok((image.into_any(), report, channels))
     }
 
     /// Each pixel's first hit (SPEC §2) as flat float32 arrays: points [n, 3], normals [n, 3]
@@ -246,7 +346,7 @@ impl PyScene {
         if let Some(c) = &camera {
             self.scene.camera = c.camera;
         }
-        let accel = self.accel()?;
+        let accel = self.accel(py)?;
         let scene = &self.scene;
         let gbuffer = py.detach(|| hmdist::render::primary_hits(accel, scene, size.0, size.1));
         self.scene.camera = original;
@@ -330,10 +430,9 @@ impl PyScene {
             .map_err(py_error)?
             .with_backend(named("backend", backend)?);
         let query = PointQuery::new(gather, seed, max_distance).map_err(py_error)?;
-        let accel = self.accel()?;
+        let accel = self.accel(py)?;
         let scene = &self.scene;
-        let h = py
-            .detach(|| hmd_at(scene, accel, &query, &surface, keys.as_deref()))
+        let h = interruptible(py, || hmd_at(scene, accel, &query, &surface, keys.as_deref()))?
             .map_err(py_error)?;
         Ok(PyArray1::from_vec(py, h))
     }
@@ -355,14 +454,23 @@ impl PyScene {
             }
             unit.push(n);
         }
-        let accel = self.accel()?;
-        let t: Vec<f32> = py.detach(|| {
+        let accel = self.accel(py)?;
+        let t: Vec<f32> = interruptible(py, || {
             use rayon::prelude::*;
-            o.par_iter()
-                .zip(&unit)
-                .map(|(o, d)| accel.hit_distance(*o, *d, f32::INFINITY, None))
-                .collect()
-        });
+            // In chunks, so that Ctrl-C stops it between them.
+            let mut t = Vec::with_capacity(o.len());
+            for (o, d) in o.chunks(1 << 16).zip(unit.chunks(1 << 16)) {
+                if hmdist::interrupt::requested() {
+                    break;
+                }
+                t.par_extend(
+                    o.par_iter()
+                        .zip(d)
+                        .map(|(o, d)| accel.hit_distance(*o, *d, f32::INFINITY, None)),
+                );
+            }
+            t
+        })?;
         Ok(PyArray1::from_vec(py, t))
     }
 
@@ -396,7 +504,9 @@ fn f_diff(
 #[pyfunction]
 #[pyo3(signature = (path, channel = "Y"))]
 fn read_exr<'py>(py: Python<'py>, path: &str, channel: &str) -> PyResult<Bound<'py, PyAny>> {
-    let image = hmdist::image::exr::read_channel(std::path::Path::new(path), channel).map_err(py_error)?;
+    let image = py
+        .detach(|| hmdist::image::exr::read_channel(std::path::Path::new(path), channel))
+        .map_err(py_error)?;
     let (w, h) = (image.width as usize, image.height as usize);
     Ok(PyArray1::from_vec(py, image.data).reshape([h, w])?.into_any())
 }

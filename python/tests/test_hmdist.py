@@ -1,8 +1,11 @@
 """The Python package against closed forms, the CLI and its own contracts (issue #13)."""
 
 import os
+import signal
 import subprocess
 import sys
+import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -132,3 +135,89 @@ def test_the_example_script_runs_with_or_without_matplotlib(tmp_path):
                          capture_output=True, text=True, check=True).stdout
     assert "cube: 256x256" in out
     assert "wrote" in out or "pip install matplotlib" in out
+
+
+def _interrupt_after(seconds):
+    """Sends this process SIGINT (Ctrl-C) after `seconds`, from another thread."""
+    timer = threading.Timer(seconds, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    return timer
+
+
+@pytest.mark.parametrize("call", ["render", "hmd_at", "cast"])
+def test_ctrl_c_stops_the_work_within_a_second_and_the_next_call_works(call):
+    s = hmdist.Scene.builtin("cube")
+    p = np.array([[0.0, 0.0, 0.0]] * 64)
+    n = np.array([[0.0, 1.0, 0.0]] * 64)
+    rays = 8_000_000 if call == "cast" else 1
+    o, d = np.zeros((rays, 3)), np.tile([0.3, 1.0, 0.2], (rays, 1))
+    long = {  # render and hmd_at take minutes on two cores, cast about a second
+        "render": lambda: s.render(size=(64, 64), rays=1 << 20),
+        "hmd_at": lambda: s.hmd_at(p, n, rays=1 << 26),
+        "cast": lambda: s.cast(o, d),
+    }[call]
+    s.cast(o[:1], d[:1])  # the BVH is built before the clock starts
+    start = time.monotonic()
+    timer = _interrupt_after(0.2)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            long()
+    finally:
+        timer.cancel()  # had the call returned first, no stray Ctrl-C hits the next test
+    assert time.monotonic() - start < 1.2, f"{call} took {time.monotonic() - start:.2f} s to stop"
+    # The next call runs to the end, as if nothing had happened.
+    H, _ = s.render(size=(8, 6), rays=16, seed=4)
+    again, _ = hmdist.Scene.builtin("cube").render(size=(8, 6), rays=16, seed=4)
+    assert np.array_equal(H.view(np.uint32), again.view(np.uint32)) and np.all(np.isfinite(H))
+
+
+def test_points_and_sizes_may_be_lists_tuples_or_arrays():
+    s = hmdist.Scene.builtin("cube")
+    tuples = hmdist.Camera((0.3, 4.3, 4.7), (0.0, 1.6, -1.6), up=(0, 1, 0), size=(12, 9))
+    for eye, target, up, size in [
+        ([0.3, 4.3, 4.7], [0, 1.6, -1.6], [0, 1, 0], [12, 9]),
+        (np.array([0.3, 4.3, 4.7]), np.array([0.0, 1.6, -1.6], dtype=np.float32), np.array([0, 1, 0]),
+         np.array([12, 9])),
+    ]:
+        cam = hmdist.Camera(eye, target, up=up, size=size)
+        assert repr(cam) == repr(tuples)
+        H, _ = s.render(cam, rays=4)
+        assert H.shape == (9, 12)
+    with pytest.raises(ValueError, match="eye must be 3 numbers"):
+        hmdist.Camera([0, 1], [0, 0, 0])
+    with pytest.raises(ValueError, match="target must be 3 numbers"):
+        hmdist.Camera([0, 1, 2], "abc")
+    with pytest.raises(ValueError, match="size must be two positive integers"):
+        hmdist.Camera([0, 1, 2], [0, 0, 0], size=(12.5, 9))
+
+
+def test_render_returns_the_aovs_asked_for_as_arrays(tmp_path):
+    s = hmdist.Scene.builtin("cube")
+    H, report, aovs = s.render(size=(16, 12), rays=64, rounds=4, aov=["relerr", "rays", "dmin"])
+    assert sorted(aovs) == ["dmin", "rays", "relerr"] and report["channels"][0] == "Y"
+    assert all(a.shape == (12, 16) and a.dtype == np.float32 for a in aovs.values())
+    surface = np.isfinite(H)
+    assert np.all(aovs["rays"][surface] == 64)
+    assert np.all(aovs["dmin"][surface] <= H[surface] * (1 + 1e-6))  # the nearest hit is no farther than H
+    # As the CLI's EXR channels, bit for bit.
+    if Path(CLI).exists():
+        exr = tmp_path / "a.exr"
+        subprocess.run([CLI, "render", "--quiet", "--size", "16x12", "--rays", "64", "--rounds", "4",
+                        "--aov", "relerr,rays,dmin", "--out", str(exr)], check=True)
+        for name, a in aovs.items():
+            assert np.array_equal(hmdist.read_exr(exr, name).view(np.uint32), a.view(np.uint32)), name
+    with pytest.raises(ValueError, match="'depth' is not one of"):
+        s.render(size=(4, 4), aov=["depth"])
+
+
+def test_a_missing_gpu_raises_device_error():
+    # No Vulkan driver at all (the loader reads only the named, missing file).
+    code = ("import hmdist, numpy as np\n"
+            "s = hmdist.Scene.builtin('slab')\n"
+            "try:\n"
+            "    s.render(size=(4, 4), rays=4, backend='gpu')\n"
+            "except hmdist.DeviceError as e:\n"
+            "    print('DeviceError:', e)\n")
+    env = dict(os.environ, VK_ICD_FILENAMES="/nonexistent/icd.json", VK_DRIVER_FILES="/nonexistent/icd.json")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    assert out.stdout.startswith("DeviceError:"), out.stdout + out.stderr
