@@ -12,18 +12,50 @@ use hmdist::sampling::Weighting;
 use hmdist::scene::Scene;
 use rayon::prelude::*;
 
-/// The kernels this CPU has; the others are skipped with their reason on stderr.
+/// The kernels this CPU has; the others are skipped with their reason on stderr (written to
+/// it directly: libtest hides `eprintln!` of a passing test). A kernel whose instructions the
+/// CPU has (asked of `std::arch` here, not of hmdist) must be available: a build that lost
+/// its AVX2 kernel fails instead of comparing the scalar kernel with itself.
 fn kernels() -> Vec<Kernel> {
-    Kernel::ALL
+    let kernels: Vec<Kernel> = Kernel::ALL
         .into_iter()
         .filter(|k| {
-            let available = k.available();
-            if !available {
-                eprintln!("skipped: this CPU cannot run the {} kernel", k.name());
+            assert!(
+                k.available() || !cpu_has(*k),
+                "this CPU has the {} instructions, but hmdist's {} kernel is not available",
+                k.name(),
+                k.name()
+            );
+            if !k.available() {
+                use std::io::Write;
+                let _ = writeln!(
+                    std::io::stderr(),
+                    "SKIPPED the {} kernel: this CPU cannot run it",
+                    k.name()
+                );
             }
-            available
+            k.available()
         })
-        .collect()
+        .collect();
+    assert!(kernels.contains(&Kernel::Scalar));
+    kernels
+}
+
+/// Whether the CPU has the instructions `kernel` needs.
+fn cpu_has(kernel: Kernel) -> bool {
+    match kernel {
+        Kernel::Scalar => true,
+        #[cfg(target_arch = "x86_64")]
+        Kernel::Avx2 => std::arch::is_x86_feature_detected!("avx2"),
+        #[cfg(target_arch = "x86_64")]
+        Kernel::Avx512 => {
+            std::arch::is_x86_feature_detected!("avx2")
+                && std::arch::is_x86_feature_detected!("avx512f")
+                && std::arch::is_x86_feature_detected!("avx512vl")
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        _ => false,
+    }
 }
 
 /// Hit distances (as bits) of `rays` cosine gather rays from each of the `side²` primary

@@ -33,8 +33,10 @@ fn script(name: &str) -> PathBuf {
 #[test]
 fn a_four_task_slurm_array_renders_what_one_machine_renders() {
     if std::env::var_os("HMDIST_SLURM_TEST").is_none() {
-        eprintln!(
-            "SKIPPED: set HMDIST_SLURM_TEST=1 (as root, with slurm-wlm and munge) to run the Slurm test"
+        common::skip(
+            "a_four_task_slurm_array_renders_what_one_machine_renders",
+            "set HMDIST_SLURM_TEST=1 (as root, with slurm-wlm and munge) to run the Slurm test",
+            None,
         );
         return;
     }

@@ -98,6 +98,22 @@ impl Drop for Scratch {
 /// Set (by `.ci/run`, or any CI that sets `CI`) where a GPU test must run, never skip.
 pub const REQUIRE_GPU: &str = "HMDIST_REQUIRE_GPU";
 
+/// Set (by `.ci/run`) where no test may skip: every skip fails instead.
+pub const NO_SKIPS: &str = "HMDIST_NO_SKIPS";
+
+/// Skips (the caller returns) `test` for `reason`, visibly: "SKIPPED test: reason" goes to
+/// stderr directly (libtest hides `eprintln!` of a passing test). Where [`NO_SKIPS`] or the
+/// environment variable `required_by` is set, the skip is a failure instead.
+pub fn skip(test: &str, reason: &str, required_by: Option<&str>) {
+    for variable in [Some(NO_SKIPS), required_by].into_iter().flatten() {
+        assert!(
+            std::env::var_os(variable).is_none(),
+            "{test} must run here ({variable} is set), but would be skipped: {reason}"
+        );
+    }
+    let _ = writeln!(std::io::stderr(), "SKIPPED {test}: {reason}");
+}
+
 /// The result of a render on the cube map's GPU backend, or `None` where this machine has no
 /// Vulkan, Metal or DX12 adapter (see [`gpu_missing`]).
 pub fn gpu_or_skip(test: &str, result: Result<Rendered>) -> Option<Rendered> {
@@ -121,20 +137,20 @@ pub fn gpu_or_skip(test: &str, result: Result<Rendered>) -> Option<Rendered> {
 /// hide `eprintln!` of a passing test). Where `HMDIST_REQUIRE_GPU` or `CI` is set, a missing
 /// adapter fails the test instead.
 pub fn gpu_missing(test: &str, error: &str) -> bool {
-    let required = std::env::var_os(REQUIRE_GPU).is_some() || std::env::var_os("CI").is_some();
     if !error.contains("no Vulkan") {
         return false;
     }
-    assert!(
-        !required,
-        "{test}: the GPU backend must run here ({REQUIRE_GPU} or CI is set): {error}"
-    );
-    let _ = writeln!(
-        std::io::stderr(),
-        "SKIPPED {test}: {}. Install a Vulkan driver (Debian: mesa-vulkan-drivers libvulkan1); \
-         set {REQUIRE_GPU}=1 to make this a failure.",
+    let required = if std::env::var_os("CI").is_some() {
+        Some("CI")
+    } else {
+        Some(REQUIRE_GPU)
+    };
+    let reason = format!(
+        "{}. Install a Vulkan driver (Debian: mesa-vulkan-drivers libvulkan1); set {REQUIRE_GPU}=1 \
+         to make this a failure.",
         error.trim()
     );
+    skip(test, &reason, required);
     true
 }
 
