@@ -159,7 +159,7 @@ fn gpu_backend_gives_exact_distances_and_agrees_with_cpu_on_cube() {
     // HMDIST_REQUIRE_GPU, so that in CI a missing adapter fails instead of skipping).
     let test = "gpu_backend_gives_exact_distances_and_agrees_with_cpu_on_cube";
     let box_scene = perpendicular_box(1.5);
-    let Some(exact) = gpu_or_skip(test, try_cubemap(&box_scene, 1, 4096, 16, Backend::Gpu)) else {
+    let Some(exact) = gpu_or_skip(test, try_cubemap(&box_scene, 1, 4096, 16, Backend::GpuSoftware)) else {
         return;
     };
     let details = exact.report.details.cubemap.as_ref().expect("cube-map details");
@@ -176,7 +176,7 @@ fn gpu_backend_gives_exact_distances_and_agrees_with_cpu_on_cube() {
     assert!(error < 1e-5, "{error}");
 
     let scene = Scene::load("cube").unwrap();
-    let gpu = try_cubemap(&scene, 64, 64, 16, Backend::Gpu).unwrap();
+    let gpu = try_cubemap(&scene, 64, 64, 16, Backend::GpuSoftware).unwrap();
     let (cpu, _) = cubemap(&scene, 64, 64, 16, Backend::Cpu);
     let d = f_diff(&cpu, &gpu.image, scene.diagonal()).unwrap();
     println!(

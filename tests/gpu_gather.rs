@@ -34,7 +34,7 @@ fn render_with(scene: &Scene, gather: Gather, size: u32, aovs: Vec<Aov>) -> Resu
 fn gpu_gather(rays: u32) -> Gather {
     Gather::new(rays, Weighting::Cosine)
         .unwrap()
-        .with_backend(Backend::Gpu)
+        .with_backend(Backend::GpuSoftware)
 }
 
 /// The GPU image, or `None` (the test skips) where this machine has no adapter.
@@ -262,4 +262,69 @@ fn gpu_h_at_points_is_the_gpu_image() {
             "pixel {key}"
         );
     }
+}
+
+#[test]
+fn backend_gpu_refuses_a_software_adapter_by_name_unless_asked() {
+    let test = "backend_gpu_refuses_a_software_adapter_by_name_unless_asked";
+    let dir = common::Scratch::new("gpu-software");
+    let run = |backend: &str, out: &str, software: bool| {
+        let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_hmdist"));
+        command
+            .args([
+                "render",
+                "--quiet",
+                "--size",
+                "8x6",
+                "--rays",
+                "4",
+                "--backend",
+                backend,
+                "--out",
+                out,
+            ])
+            .current_dir(dir.path())
+            .env_remove("HMDIST_GPU_SOFTWARE");
+        if software {
+            command.env("HMDIST_GPU_SOFTWARE", "1");
+        }
+        command.output().unwrap()
+    };
+    let asked = run("gpu-software", "asked.exr", false);
+    let stderr = String::from_utf8_lossy(&asked.stderr);
+    if !asked.status.success() && common::gpu_missing(test, &stderr) {
+        return;
+    }
+    assert!(asked.status.success(), "{stderr}");
+    let json = common::cli::read_json(&dir.join("asked.json"));
+    let adapter = json["adapter"].as_str().unwrap().to_string();
+    if !adapter.contains("llvmpipe") {
+        common::skip(
+            test,
+            &format!("the adapter here, {adapter}, is hardware: nothing to refuse"),
+            None,
+        );
+        return;
+    }
+    // --backend gpu: refused, naming the adapter and the way to use it anyway; nothing written.
+    let refused = run("gpu", "refused.exr", false);
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(2), "{stderr}");
+    for words in [
+        "llvmpipe",
+        "software implementation",
+        "--backend gpu-software",
+        "HMDIST_GPU_SOFTWARE=1",
+    ] {
+        assert!(stderr.contains(words), "{words}: {stderr}");
+    }
+    assert!(!dir.join("refused.exr").exists());
+    // Asked through the environment, gpu runs on it; auto stays on the CPU without it.
+    assert!(run("gpu", "env.exr", true).status.success());
+    assert_eq!(
+        common::cli::read_json(&dir.join("env.json"))["adapter"],
+        json["adapter"]
+    );
+    assert!(run("auto", "auto.exr", false).status.success());
+    assert_eq!(common::cli::read_json(&dir.join("auto.json"))["backend"], "cpu");
 }

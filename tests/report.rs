@@ -111,7 +111,14 @@ fn cubemap_on_the_gpu_casts_no_rays_and_counts_what_it_rasterises_and_looks_up()
     let Some(r) = report(
         &dir,
         test,
-        &["--method", "cubemap", "--backend", "gpu", "--cube-res", "4"],
+        &[
+            "--method",
+            "cubemap",
+            "--backend",
+            "gpu-software",
+            "--cube-res",
+            "4",
+        ],
     ) else {
         return;
     };

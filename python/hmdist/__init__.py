@@ -110,7 +110,8 @@ class Scene:
         i's random numbers are keyed by keys[i] (default i), as pixel i's are in an image.
         `triangles` (the triangle each point lies on) and `errors` (its floating-point error
         bound [n, 3]), as `primary_hits` gives them, start the rays exactly as the image's.
-        `backend` ("auto", "gpu", "cpu") says where the rays are cast, as render's does."""
+        `backend` ("auto", "gpu", "gpu-software", "cpu") says where the rays are cast, as
+        render's does."""
         p = _vectors("points", points)
         n = _vectors("normals", normals, rows=p.shape[0])
         k = None if keys is None else _integers("keys", keys, (p.shape[0],))

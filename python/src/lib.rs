@@ -383,7 +383,7 @@ impl PyScene {
     /// H at points [n, 3] with normals [n, 3] (float64), float32 [n]: point i's random
     /// numbers keyed by `keys[i]` (uint64 [n]) or by i; optionally the triangle each lies on
     /// (uint64 [n]) and its error bound (float64 [n, 3]), as `primary_hits` gives them; the
-    /// rays cast on `backend` (auto, gpu, cpu), as `render`'s are.
+    /// rays cast on `backend` (auto, gpu, gpu-software, cpu), as `render`'s are.
     #[allow(clippy::too_many_arguments)]
     #[pyo3(signature = (points, normals, rays, seed, keys, weighting, max_distance, triangles = None, errors = None, backend = "auto"))]
     fn hmd_at<'py>(

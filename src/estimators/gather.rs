@@ -139,13 +139,8 @@ impl Gather {
     /// The GPU to cast on, or `None` for the CPU: see [`Gather::with_backend`].
     #[cfg(feature = "gpu")]
     pub(crate) fn gpu(&self, accel: &crate::accel::Accel) -> Result<Option<crate::gpu::GpuScene>> {
-        use crate::gpu::GpuScene;
-        Ok(match self.backend {
-            Backend::Cpu => None,
-            Backend::Gpu => Some(GpuScene::new(accel, true)?),
-            // A software implementation (lavapipe) is slower than the CPU: auto wants hardware.
-            Backend::Auto if crate::gpu::hardware_adapter() => GpuScene::new(accel, false).ok(),
-            Backend::Auto => None,
+        crate::gpu::open_for(self.backend, |software| {
+            crate::gpu::GpuScene::new(accel, software)
         })
     }
 
@@ -271,11 +266,8 @@ impl Estimator for Gather {
                 .map(|e| Work::Done(Box::new(e)));
         }
         #[cfg(not(feature = "gpu"))]
-        if self.backend == Backend::Gpu {
-            return Err(Error::device(
-                crate::error::DeviceErrorKind::NoAdapter,
-                "this hmdist was built without the gpu feature: use the cpu backend",
-            ));
+        if self.backend.is_gpu() {
+            return Err(Backend::unavailable());
         }
         let ao_radius = match ao {
             AoRadius::Given(r) => Some(r),

@@ -117,6 +117,25 @@ pub(crate) fn gather_points(
         padding: 0,
     };
     let batch_points = job.split.map_or(MAX_POINTS, |s| s.points.clamp(1, MAX_POINTS)) as usize;
+    // The shader indexes sums by `i·rounds + round` in u32, and each buffer must fit the
+    // device: fewer points per batch where there are many rounds.
+    let batch_points = batch_points.min(u32::MAX as usize / rounds as usize).max(1);
+    let device = &scene.device;
+    let largest = device
+        .limits
+        .max_storage_buffer_binding_size
+        .min(device.limits.max_buffer_size);
+    let per_point = (rounds as u64 * 8).max(std::mem::size_of::<[[f32; 4]; 4]>() as u64);
+    let batch_points = batch_points.min((largest / per_point).max(1) as usize);
+    crate::gpu::check_buffers(
+        device,
+        "the GPU gather",
+        &[
+            ("starts", batch_points * std::mem::size_of::<[[f32; 4]; 4]>()),
+            ("states", batch_points * std::mem::size_of::<State>()),
+            ("sums", batch_points * rounds as usize * 8),
+        ],
+    )?;
     let mut out = GpuGather {
         points: Vec::with_capacity(starts.len()),
         upload_seconds: 0.0,
@@ -124,7 +143,6 @@ pub(crate) fn gather_points(
         readback_seconds: 0.0,
     };
     progress.start("gather (gpu)", starts.len() as u64 * rays as u64);
-    let device = &scene.device;
     for (b, batch) in starts.chunks(batch_points).enumerate() {
         let first_point = b * batch_points;
         let clock = Instant::now();

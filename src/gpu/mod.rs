@@ -20,6 +20,60 @@ mod scene;
 pub use scene::{DispatchSplit, GpuRay, GpuScene};
 
 use crate::error::{DeviceErrorKind, Error, Result};
+use crate::estimators::Backend;
+
+/// Set to 1 to let `--backend gpu` (and `auto`) run on a software implementation (Mesa's
+/// lavapipe), as `--backend gpu-software` does.
+pub const SOFTWARE_GPU: &str = "HMDIST_GPU_SOFTWARE";
+
+/// Whether [`SOFTWARE_GPU`] allows software adapters.
+fn software_allowed() -> bool {
+    std::env::var(SOFTWARE_GPU).is_ok_and(|v| !v.is_empty() && v != "0")
+}
+
+/// The GPU `backend` runs on, opened by `open(allow_software)`, or `None` for the CPU: the one
+/// place the backend choice is made, for gather, H at points and the cube map.
+/// - `cpu`: none.
+/// - `gpu`: a hardware adapter ([`SOFTWARE_GPU`] allows software); any failure is the error.
+/// - `gpu-software`: any adapter.
+/// - `auto`: the CPU where there is no hardware adapter (or, with [`SOFTWARE_GPU`], no adapter
+///   at all); where there is one, the GPU, and its failures (out of memory, a rejected
+///   shader) are errors, not a quiet CPU render.
+pub(crate) fn open_for<T>(backend: Backend, open: impl FnOnce(bool) -> Result<T>) -> Result<Option<T>> {
+    choose(backend, software_allowed(), adapter_for_auto, open)
+}
+
+/// [`open_for`]'s rule, with the environment (`software`: [`SOFTWARE_GPU`] is set) and the
+/// probe for `auto` (`adapter(software)`: is there an adapter it may use) given.
+fn choose<T>(
+    backend: Backend,
+    software: bool,
+    adapter: impl FnOnce(bool) -> bool,
+    open: impl FnOnce(bool) -> Result<T>,
+) -> Result<Option<T>> {
+    match backend {
+        Backend::Cpu => Ok(None),
+        Backend::Gpu => open(software).map(Some),
+        Backend::GpuSoftware => open(true).map(Some),
+        Backend::Auto if adapter(software) => open(software).map(Some),
+        Backend::Auto => Ok(None),
+    }
+}
+
+/// Whether `--backend auto` runs on the GPU here.
+pub(crate) fn auto_uses_gpu() -> bool {
+    adapter_for_auto(software_allowed())
+}
+
+/// Whether `auto` runs on the GPU: there is a hardware adapter, or any where `software`.
+fn adapter_for_auto(software: bool) -> bool {
+    if software {
+        static ANY: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+        *ANY.get_or_init(|| Device::open("hmdist probe", true, wgpu::Features::empty()).is_ok())
+    } else {
+        hardware_adapter()
+    }
+}
 
 /// A wgpu device and what it is called.
 pub(crate) struct Device {
@@ -53,7 +107,13 @@ impl Device {
         })?;
         let info = adapter.get_info();
         if info.device_type == wgpu::DeviceType::Cpu && !allow_software {
-            let message = format!("adapter '{}' is a software implementation", info.name);
+            let message = format!(
+                "the only adapter, '{}', is a software implementation (hundreds of times slower \
+                 than a GPU, and slower than the CPU backend): there is no hardware GPU here, or \
+                 its Vulkan driver is not visible; --backend gpu-software (or {SOFTWARE_GPU}=1) \
+                 runs on it anyway",
+                info.name
+            );
             return Err(Error::device(DeviceErrorKind::NoAdapter, message));
         }
         if !adapter.features().contains(features) {
@@ -155,6 +215,27 @@ pub(crate) fn checked<T>(device: &wgpu::Device, what: &str, work: impl FnOnce() 
     result
 }
 
+/// Refuses buffers (name, bytes) larger than `device` binds or allocates, before any is made:
+/// an error naming the buffer, its size and the adapter's limit (wgpu would fail later, less
+/// clearly, or the driver would).
+pub(crate) fn check_buffers(device: &Device, what: &str, buffers: &[(&str, usize)]) -> Result<()> {
+    let binding = device.limits.max_storage_buffer_binding_size;
+    let buffer = device.limits.max_buffer_size;
+    for &(name, bytes) in buffers {
+        let limit = binding.min(buffer);
+        if bytes as u64 > limit {
+            let message = format!(
+                "{what} needs a {:.1} MB '{name}' buffer; adapter '{}' allows at most {:.1} MB",
+                bytes as f64 / 1e6,
+                device.adapter_name,
+                limit as f64 / 1e6
+            );
+            return Err(Error::device(DeviceErrorKind::Unsupported, message));
+        }
+    }
+    Ok(())
+}
+
 /// Workgroups for `invocations` invocations of 64 as a 2D grid (`x · y`, x at most the
 /// device limit): the shaders index `id.x + id.y · groups.x · 64`.
 pub(crate) fn workgroups(invocations: u32, limit: u32) -> (u32, u32) {
@@ -168,4 +249,56 @@ pub(crate) fn workgroups(invocations: u32, limit: u32) -> (u32, u32) {
 pub(crate) fn hardware_adapter() -> bool {
     static PROBED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
     *PROBED.get_or_init(|| Device::open("hmdist probe", false, wgpu::Features::empty()).is_ok())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// What `choose` did: opened with software allowed or not, or not at all, and its answer.
+    fn chosen(
+        backend: Backend,
+        software: bool,
+        adapter: bool,
+        fails: bool,
+    ) -> (Option<bool>, Result<Option<()>>) {
+        let mut opened = None;
+        let result = choose(
+            backend,
+            software,
+            |_| adapter,
+            |allow| {
+                opened = Some(allow);
+                if fails {
+                    Err(Error::device(DeviceErrorKind::OutOfMemory, "out of memory"))
+                } else {
+                    Ok(())
+                }
+            },
+        );
+        (opened, result)
+    }
+
+    #[test]
+    fn auto_reports_a_failing_gpu_and_only_gpu_software_takes_a_software_adapter() {
+        // auto with an adapter whose work fails: the failure, not a quiet CPU render.
+        let (opened, result) = chosen(Backend::Auto, false, true, true);
+        assert_eq!(opened, Some(false));
+        assert!(matches!(
+            result,
+            Err(Error::Device {
+                kind: DeviceErrorKind::OutOfMemory,
+                ..
+            })
+        ));
+        // auto without one: the CPU, nothing opened.
+        let (opened, result) = chosen(Backend::Auto, false, false, true);
+        assert!(opened.is_none() && matches!(result, Ok(None)));
+        // gpu asks for hardware unless HMDIST_GPU_SOFTWARE; gpu-software takes any adapter.
+        assert_eq!(chosen(Backend::Gpu, false, true, false).0, Some(false));
+        assert_eq!(chosen(Backend::Gpu, true, true, false).0, Some(true));
+        assert_eq!(chosen(Backend::GpuSoftware, false, true, false).0, Some(true));
+        assert_eq!(chosen(Backend::Auto, true, true, false).0, Some(true));
+        assert!(chosen(Backend::Cpu, true, true, false).0.is_none());
+    }
 }
