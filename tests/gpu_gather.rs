@@ -328,3 +328,64 @@ fn backend_gpu_refuses_a_software_adapter_by_name_unless_asked() {
     assert!(run("auto", "auto.exr", false).status.success());
     assert_eq!(common::cli::read_json(&dir.join("auto.json"))["backend"], "cpu");
 }
+
+#[test]
+fn gpu_list_numbers_the_adapters_and_gpu_picks_one_or_says_what_there_is() {
+    let test = "gpu_list_numbers_the_adapters_and_gpu_picks_one_or_says_what_there_is";
+    let dir = common::Scratch::new("gpu-select");
+    let list = common::cli::hmdist(dir.path(), &["gpu", "list"]);
+    let listing = String::from_utf8_lossy(&list.stdout).to_string();
+    assert!(list.status.success(), "{listing}");
+    if listing.starts_with("no Vulkan") {
+        common::gpu_missing(test, "no Vulkan, Metal or DX12 adapter");
+        return;
+    }
+    // "*  0  llvmpipe (...)  cpu  Vulkan ...": the first adapter's name, as --gpu takes it.
+    let first = listing.lines().next().unwrap();
+    assert!(first.contains(" 0  "), "{listing}");
+    let name: String = first[6..].split("  ").next().unwrap().trim().to_string();
+    let render = |args: &[&str]| {
+        let mut all = vec![
+            "render",
+            "--quiet",
+            "--size",
+            "8x6",
+            "--rays",
+            "4",
+            "--backend",
+            "gpu-software",
+        ];
+        all.extend_from_slice(args);
+        common::cli::hmdist(dir.path(), &all)
+    };
+    let named = render(&["--gpu", &name[..4], "--out", "named.exr"]);
+    assert!(
+        named.status.success(),
+        "{}",
+        String::from_utf8_lossy(&named.stderr)
+    );
+    let adapter = common::cli::read_json(&dir.join("named.json"))["adapter"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    assert!(adapter.starts_with(&name), "{adapter} is not {name}");
+    let count = listing
+        .lines()
+        .filter(|l| l.len() > 4 && l[2..4].trim().parse::<usize>().is_ok())
+        .count();
+    for args in [
+        vec!["--gpu".to_string(), count.to_string()],
+        vec!["--gpu".into(), "no such GPU".into()],
+    ] {
+        let mut all: Vec<&str> = args.iter().map(String::as_str).collect();
+        all.extend(["--out", "bad.exr"]);
+        let bad = render(&all);
+        let stderr = String::from_utf8_lossy(&bad.stderr);
+        assert_eq!(bad.status.code(), Some(2), "{stderr}");
+        assert!(
+            stderr.contains(&args[1]) && stderr.contains(&format!("0: {name}")),
+            "{stderr}"
+        );
+        assert!(!dir.join("bad.exr").exists());
+    }
+}

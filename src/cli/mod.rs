@@ -6,6 +6,7 @@
 mod bar;
 mod diff;
 mod experiment;
+mod gpu;
 mod merge;
 mod photons;
 mod points;
@@ -30,6 +31,11 @@ use hmdist::error::{Error, Result};
 pub struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// The GPU adapter for --backend gpu|gpu-software|auto: an index of `hmdist gpu list`, or a
+    /// part of an adapter's name or PCI bus id [default: HMDIST_GPU, else CUDA_VISIBLE_DEVICES's
+    /// first GPU, else one per SLURM_LOCALID, else wgpu's choice].
+    #[arg(long, global = true, value_name = "N|NAME")]
+    gpu: Option<String>,
 }
 
 #[derive(Subcommand)]
@@ -50,9 +56,16 @@ enum Command {
     /// Inspect or export a scene.
     #[command(subcommand)]
     Scene(scene::SceneCommand),
+    /// List the GPU adapters and the one the GPU backends take.
+    #[command(subcommand)]
+    Gpu(gpu::GpuCommand),
 }
 
 pub fn run(cli: Cli) -> Result<()> {
+    #[cfg(feature = "gpu")]
+    if let Some(selector) = &cli.gpu {
+        hmdist::gpu::select_adapter(selector);
+    }
     match cli.command {
         Command::Render(args) => render::run(args),
         Command::Points(args) => points::run(args),
@@ -61,6 +74,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Diff(args) => diff::run(args),
         Command::Experiment(args) => experiment::run(args),
         Command::Scene(command) => scene::run(command),
+        Command::Gpu(command) => gpu::run(command),
     }
 }
 

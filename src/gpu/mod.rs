@@ -16,8 +16,90 @@
 
 pub(crate) mod gather;
 mod scene;
+mod select;
 
 pub use scene::{DispatchSplit, GpuRay, GpuScene};
+pub use select::{select_adapter, AdapterListing, SELECT_GPU};
+
+/// The graphics APIs hmdist runs on. (Not GL: wgpu's GL fallback has neither R32Float render
+/// targets nor storage buffers everywhere.)
+const BACKENDS: wgpu::Backends = wgpu::Backends::VULKAN
+    .union(wgpu::Backends::METAL)
+    .union(wgpu::Backends::DX12);
+
+fn instance() -> wgpu::Instance {
+    wgpu::Instance::new(wgpu::InstanceDescriptor {
+        backends: BACKENDS,
+        ..wgpu::InstanceDescriptor::new_without_display_handle_from_env()
+    })
+}
+
+/// `instance`'s adapters, in the order `--gpu N` counts them, with their listings.
+fn enumerate(instance: &wgpu::Instance) -> (Vec<wgpu::Adapter>, Vec<AdapterListing>) {
+    let adapters = pollster::block_on(instance.enumerate_adapters(BACKENDS));
+    let listed = adapters
+        .iter()
+        .enumerate()
+        .map(|(i, a)| AdapterListing::of(i, &a.get_info()))
+        .collect();
+    (adapters, listed)
+}
+
+/// The adapter that `--gpu`, `HMDIST_GPU`, `CUDA_VISIBLE_DEVICES` or `SLURM_LOCALID` assign
+/// (see `select.rs`), or `None` where none applies and wgpu chooses.
+fn assigned(instance: &wgpu::Instance) -> Result<Option<wgpu::Adapter>> {
+    let assignment = select::Assignment::from_process();
+    if assignment.is_empty() {
+        return Ok(None);
+    }
+    let (mut adapters, listed) = enumerate(instance);
+    Ok(select::choose(&listed, &assignment)?.map(|i| adapters.swap_remove(i)))
+}
+
+/// The adapter the GPU backends open: the assigned one, else wgpu's high-performance choice.
+fn pick(instance: &wgpu::Instance) -> Result<wgpu::Adapter> {
+    match assigned(instance)? {
+        Some(adapter) => Ok(adapter),
+        None => wgpus_choice(instance),
+    }
+}
+
+/// wgpu's high-performance adapter.
+fn wgpus_choice(instance: &wgpu::Instance) -> Result<wgpu::Adapter> {
+    pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+        power_preference: wgpu::PowerPreference::HighPerformance,
+        force_fallback_adapter: false,
+        compatible_surface: None,
+        ..Default::default()
+    }))
+    .map_err(|e| {
+        let message = format!("no Vulkan, Metal or DX12 adapter ({e})");
+        Error::device(DeviceErrorKind::NoAdapter, message)
+    })
+}
+
+/// Every Vulkan, Metal or DX12 adapter of this machine, in the order `--gpu N` counts them,
+/// and the one the GPU backends take here: `hmdist gpu list`.
+pub fn adapters() -> Result<(Vec<AdapterListing>, Option<AdapterListing>)> {
+    let instance = instance();
+    let (_, listed) = enumerate(&instance);
+    let taken = match assigned(&instance)? {
+        Some(adapter) => Some(adapter),
+        None => wgpus_choice(&instance).ok(),
+    };
+    let taken = taken.and_then(|a| {
+        let info = a.get_info();
+        listed
+            .iter()
+            .find(|l| {
+                l.name == info.name
+                    && l.pci_bus == info.device_pci_bus_id
+                    && l.backend == format!("{:?}", info.backend)
+            })
+            .cloned()
+    });
+    Ok((listed, taken))
+}
 
 use crate::error::{DeviceErrorKind, Error, Result};
 use crate::estimators::Backend;
@@ -91,20 +173,7 @@ impl Device {
     /// has neither R32Float render targets nor storage buffers everywhere.) A software
     /// implementation (Mesa's lavapipe) is taken only when `allow_software`.
     pub fn open(label: &str, allow_software: bool, features: wgpu::Features) -> Result<Device> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
-            backends: wgpu::Backends::VULKAN | wgpu::Backends::METAL | wgpu::Backends::DX12,
-            ..wgpu::InstanceDescriptor::new_without_display_handle_from_env()
-        });
-        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-            power_preference: wgpu::PowerPreference::HighPerformance,
-            force_fallback_adapter: false,
-            compatible_surface: None,
-            ..Default::default()
-        }))
-        .map_err(|e| {
-            let message = format!("no Vulkan, Metal or DX12 adapter ({e})");
-            Error::device(DeviceErrorKind::NoAdapter, message)
-        })?;
+        let adapter = pick(&instance())?;
         let info = adapter.get_info();
         if info.device_type == wgpu::DeviceType::Cpu && !allow_software {
             let message = format!(
