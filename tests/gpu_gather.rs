@@ -264,6 +264,9 @@ fn gpu_h_at_points_is_the_gpu_image() {
     }
 }
 
+/// A render small enough for lavapipe, for the CLI tests.
+const TINY_RENDER: [&str; 6] = ["render", "--quiet", "--size", "8x6", "--rays", "4"];
+
 #[test]
 fn backend_gpu_refuses_a_software_adapter_by_name_unless_asked() {
     let test = "backend_gpu_refuses_a_software_adapter_by_name_unless_asked";
@@ -271,18 +274,8 @@ fn backend_gpu_refuses_a_software_adapter_by_name_unless_asked() {
     let run = |backend: &str, out: &str, software: bool| {
         let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_hmdist"));
         command
-            .args([
-                "render",
-                "--quiet",
-                "--size",
-                "8x6",
-                "--rays",
-                "4",
-                "--backend",
-                backend,
-                "--out",
-                out,
-            ])
+            .args(TINY_RENDER)
+            .args(["--backend", backend, "--out", out])
             .current_dir(dir.path())
             .env_remove("HMDIST_GPU_SOFTWARE");
         if software {
@@ -345,16 +338,8 @@ fn gpu_list_numbers_the_adapters_and_gpu_picks_one_or_says_what_there_is() {
     assert!(first.contains(" 0  "), "{listing}");
     let name: String = first[6..].split("  ").next().unwrap().trim().to_string();
     let render = |args: &[&str]| {
-        let mut all = vec![
-            "render",
-            "--quiet",
-            "--size",
-            "8x6",
-            "--rays",
-            "4",
-            "--backend",
-            "gpu-software",
-        ];
+        let mut all = TINY_RENDER.to_vec();
+        all.extend(["--backend", "gpu-software"]);
         all.extend_from_slice(args);
         common::cli::hmdist(dir.path(), &all)
     };
