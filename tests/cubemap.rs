@@ -174,6 +174,15 @@ fn gpu_backend_gives_exact_distances_and_agrees_with_cpu_on_cube() {
         exact.image.data[0], gathered.data[0]
     );
     assert!(error < 1e-5, "{error}");
+    // 65,536 directions, the paper's reference count: past lavapipe's 65,535 loop iterations
+    // per invocation, which dropped the last lookup (an error of 1/65,536 in H, 1.5e-5). Now
+    // the lookups are split into dispatches and their count is checked.
+    let all = try_cubemap(&box_scene, 1, 65536, 16, Backend::GpuSoftware).unwrap();
+    let (gathered, _) = common::gather(&box_scene, 1, 1, 65536, Weighting::Cosine, None);
+    let error = relative_difference(&all.image, &gathered);
+    println!("box at 65,536 directions: |Δ|/H = {error:e}");
+    assert!(error < 1e-5, "{error}");
+    assert_eq!(all.report.details.cubemap.as_ref().unwrap().lookups, 65536);
 
     let scene = Scene::load("cube").unwrap();
     let gpu = try_cubemap(&scene, 64, 64, 16, Backend::GpuSoftware).unwrap();

@@ -58,7 +58,9 @@ fn agrees_with_cpu(test: &str, scene: &Scene, sphere_radius: Option<f32>) {
         diff.compared,
         cpu.image.data.iter().filter(|h| h.is_finite()).count()
     );
-    assert!(diff.compared > 0 && diff.value <= 0.01, "f_diff {}", diff.value);
+    // The GPU's distances differ from the CPU's in the last bits only (fused multiply-adds,
+    // sin/cos/division not correctly rounded): f_diff is about 1e-5, not 1e-2.
+    assert!(diff.compared > 0 && diff.value <= 1e-4, "f_diff {}", diff.value);
     assert_eq!(gpu.report.rays_cast, cpu.report.rays_cast);
     if let Some(r) = sphere_radius {
         let h: Vec<f64> = gpu
@@ -197,10 +199,15 @@ fn gpu_images_do_not_depend_on_the_run_or_the_dispatch_split() {
         return;
     };
     let splits = [
-        DispatchSplit { points: 100, rays: 7 },
+        DispatchSplit {
+            points: 100,
+            rays: 7,
+            ..Default::default()
+        },
         DispatchSplit {
             points: 1 << 20,
             rays: 1,
+            ..Default::default()
         },
     ];
     let again = render_with(&scene, gather, 32, aovs.clone()).unwrap();
@@ -372,5 +379,38 @@ fn gpu_list_numbers_the_adapters_and_gpu_picks_one_or_says_what_there_is() {
             "{stderr}"
         );
         assert!(!dir.join("bad.exr").exists());
+    }
+}
+
+#[test]
+fn a_gpu_loop_cut_short_is_an_error_not_an_image() {
+    let test = "a_gpu_loop_cut_short_is_an_error_not_an_image";
+    // 4,096 rays per point in one dispatch: on lavapipe, far past its cap of 65,535 loop
+    // iterations per invocation (the split lifts hmdist's own guard against it).
+    let scene = Scene::load("cube").unwrap();
+    let split = DispatchSplit {
+        points: 1 << 20,
+        rays: 4096,
+        past_software_cap: true,
+    };
+    let gather = gpu_gather(4096).with_dispatch_split(split);
+    match render_with(&scene, gather, 4, vec![]) {
+        Err(e) if common::gpu_missing(test, &e.to_string()) => {}
+        Err(e) => {
+            let message = e.to_string();
+            assert!(
+                message.contains("cut short") && message.contains("4096 rays"),
+                "{message}"
+            );
+        }
+        Ok(rendered) => {
+            // A hardware GPU has no such cap: then every ray was cast.
+            let device = rendered.report.details.device.unwrap();
+            assert!(
+                !device.adapter.unwrap_or_default().contains("llvmpipe"),
+                "lavapipe's cut went unseen"
+            );
+            assert_eq!(rendered.report.rays_cast, Some(16 * 4096));
+        }
     }
 }

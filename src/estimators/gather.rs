@@ -47,12 +47,16 @@ pub struct Gather {
 /// How a gather's work is split into dispatches: at most `points` points and `rays` rays per
 /// point each. The result does not depend on it (tests check this); without
 /// [`Gather::with_dispatch_split`], dispatches take about half a second each.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct DispatchSplit {
     /// Points per dispatch.
     pub points: u32,
     /// Rays per point per dispatch.
     pub rays: u32,
+    /// Lets `rays` exceed what a software adapter's loop cap allows (16 rays per point per
+    /// dispatch on lavapipe): for the test that a loop cut short is caught, not turned into
+    /// an image.
+    pub past_software_cap: bool,
 }
 
 /// Rounds of gather rays when the `relerr` AOV is asked for and no rounds are named.

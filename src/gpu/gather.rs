@@ -11,7 +11,7 @@ use std::time::Instant;
 use bytemuck::{Pod, Zeroable};
 
 use super::scene::{leaving_bits, shader_t_max, DispatchSplit, GpuScene};
-use crate::error::Result;
+use crate::error::{DeviceErrorKind, Error, Result};
 use crate::estimators::gather::{median_finite, AoRadius, GatherStart, PointGather};
 use crate::estimators::{
     AovImage, AovSample, DistanceClamp, Estimate, EstimateContext, GBuffer, Gather, RayCount, Tally,
@@ -63,7 +63,9 @@ struct State {
     dmin: f32,
     ao_open: [f32; 2],
     ao_total: [f32; 2],
-    padding: [u32; 2],
+    /// Rays the shader cast for the point, counted by the shader itself.
+    rays: u32,
+    padding: u32,
 }
 
 /// A gather on the GPU: each point's figures and the seconds of each step.
@@ -165,7 +167,8 @@ pub(crate) fn gather_points(
             dmin: f32::INFINITY,
             ao_open: [0.0; 2],
             ao_total: [0.0; 2],
-            padding: [0; 2],
+            rays: 0,
+            padding: 0,
         };
         let (states, sums) = device.checked("the GPU gather", || {
             let copy = wgpu::BufferUsages::COPY_SRC;
@@ -188,7 +191,8 @@ pub(crate) fn gather_points(
 
             let clock = Instant::now();
             let mut first_ray = 0u32;
-            let most = if device.software { SOFTWARE_MAX_RAYS } else { rays };
+            let capped = device.software && !job.split.is_some_and(|s| s.past_software_cap);
+            let most = if capped { SOFTWARE_MAX_RAYS } else { rays };
             let mut step = match job.split {
                 Some(split) => split.rays.clamp(1, most),
                 None => (FIRST_DISPATCH_RAYS / batch.len() as u64).clamp(1, most as u64) as u32,
@@ -225,6 +229,17 @@ pub(crate) fn gather_points(
         })?;
         let states: Vec<State> = bytemuck::pod_collect_to_vec(&states);
         let sums: Vec<[f32; 2]> = bytemuck::pod_collect_to_vec(&sums);
+        // The shader's own count: a loop the driver cut short (lavapipe stops a shader loop
+        // after 65,535 iterations) would otherwise come back as a plausible, wrong image.
+        if let Some((i, short)) = states.iter().enumerate().find(|(_, s)| s.rays != rays) {
+            let message = format!(
+                "the GPU cast {} of point {}'s {rays} rays: a shader loop was cut short (a \
+                 driver's cap on loop iterations?), so the result was thrown away",
+                short.rays,
+                first_point + i
+            );
+            return Err(Error::device(DeviceErrorKind::Failed, message));
+        }
         // A Kahan sum is its value less its carry.
         let compensated = |[value, carry]: [f32; 2]| value as f64 - carry as f64;
         for (i, state) in states.iter().enumerate() {

@@ -38,7 +38,9 @@ struct State {
     dmin: f32,
     ao_open: vec2<f32>,
     ao_total: vec2<f32>,
-    padding: vec2<u32>,
+    // Rays cast for the point, checked on the host.
+    rays: u32,
+    padding: u32,
 };
 
 @group(1) @binding(0) var<uniform> gather_params: GatherParams;
@@ -77,6 +79,7 @@ fn gather(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups)
         let w = hemisphere(p.weighting, stratified(g - r * p.per_round, p.grid_a, p.grid_b, random_pair(p.seed, key, g)));
         let direction = w.x * start.t.xyz + w.y * start.b.xyz + w.z * start.n.xyz;
         let hit = closest_hit(start.origin.xyz, direction, p.t_max, leaving, &stack);
+        state.rays++;
         var inverse = 0.0;
         if hit.hit {
             state.dmin = min(state.dmin, hit.t);

@@ -40,7 +40,15 @@ struct Params {
     far: f32,
     d_min: f32,
     d_max: f32,
+    /// The lookups of this dispatch: directions `first_ray..end_ray` of every hemicube.
+    first_ray: u32,
+    end_ray: u32,
+    padding: [u32; 2],
 }
+
+/// Lookups per hemicube per dispatch on a software adapter: lavapipe stops a shader loop
+/// after 65,535 iterations per invocation, and a 65,536-direction loop ran into it.
+const SOFTWARE_MAX_LOOKUPS: u32 = 4096;
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -51,13 +59,17 @@ struct Cube {
     n: [f32; 4],
 }
 
-/// What the lookup pass writes per hemicube (`Lookup` in the shader).
+/// What the lookup pass accumulates per hemicube over its dispatches (`Lookup` in the shader).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct LookupResult {
-    hmd: f32,
+    /// Kahan sum of `1/d` and its carry.
+    sum: f32,
+    carry: f32,
     /// Lookups whose texel holds no surface (within `--max-distance`).
     escaped: u32,
+    /// Lookups made, counted by the shader (checked against the directions asked for).
+    looked: u32,
 }
 
 /// One batch's results per hemicube, and the seconds of each half.
@@ -83,6 +95,8 @@ pub struct Gpu {
     queue: wgpu::Queue,
     pub adapter_name: String,
     max_texture: u32,
+    /// A software implementation (lavapipe): lookups are split into short dispatches.
+    software: bool,
 }
 
 impl Gpu {
@@ -95,13 +109,14 @@ impl Gpu {
             queue,
             adapter_name,
             limits,
-            ..
+            software: device_software,
         } = crate::gpu::Device::open("hmdist hemicubes", allow_software, wgpu::Features::CLIP_DISTANCES)?;
         Ok(Gpu {
             device,
             queue,
             adapter_name,
             max_texture: limits.max_texture_dimension_2d,
+            software: device_software,
         })
     }
 }
@@ -221,7 +236,12 @@ fn estimate_batches(
         far: 4.0 * context.scene.diagonal() + 1.0,
         d_min: clamp.min,
         d_max: if clamp.max.is_finite() { clamp.max } else { 0.0 },
+        first_ray: 0,
+        end_ray: 0,
+        padding: [0; 2],
     };
+    let rays = base.rays;
+    let per_dispatch = if gpu.software { SOFTWARE_MAX_LOOKUPS } else { rays };
 
     let mut hmd = vec![f32::NAN; gbuffer.points.len()];
     let (mut raster, mut lookup, mut escaped) = (0.0, 0.0, 0);
@@ -233,11 +253,24 @@ fn estimate_batches(
             count: batch.len() as u32,
             ..base
         };
-        let done = pipeline.run(gpu, &params, &cubes)?;
+        let done = pipeline.run(gpu, &params, &cubes, per_dispatch)?;
         raster += done.raster_seconds;
         lookup += done.lookup_seconds;
         for ((i, _), result) in batch.iter().zip(done.values) {
-            hmd[*i] = result.hmd;
+            if result.looked != rays {
+                let message = format!(
+                    "the GPU made {} of pixel {i}'s {rays} cube-map lookups: a shader loop was cut \
+                     short (a driver's cap on loop iterations?), so the result was thrown away",
+                    result.looked
+                );
+                return Err(Error::device(DeviceErrorKind::Failed, message));
+            }
+            // As the shader did before the lookups were split: H = N / Σ 1/d.
+            hmd[*i] = if result.sum > 0.0 {
+                rays as f32 / result.sum
+            } else {
+                f32::INFINITY
+            };
             escaped += result.escaped as u64;
         }
         progress.advance(batch.len() as u64);
@@ -422,7 +455,9 @@ impl Pipeline {
 
     /// Rasterises and looks up one batch; the result per hemicube and the seconds of each
     /// half.
-    fn run(&self, gpu: &Gpu, params: &Params, cubes: &[Cube]) -> Result<Batch> {
+    /// Rasterises `cubes`' hemicubes, then looks their directions up in dispatches of at most
+    /// `per_dispatch` directions each (the sums carried between them).
+    fn run(&self, gpu: &Gpu, params: &Params, cubes: &[Cube], per_dispatch: u32) -> Result<Batch> {
         let device = &gpu.device;
         let init = |label, contents: &[u8], usage| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -431,7 +466,11 @@ impl Pipeline {
                 usage,
             })
         };
-        let params_buffer = init("params", bytemuck::bytes_of(params), wgpu::BufferUsages::UNIFORM);
+        let params_buffer = init(
+            "params",
+            bytemuck::bytes_of(params),
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
         let cube_buffer = init("cubes", bytemuck::cast_slice(cubes), wgpu::BufferUsages::STORAGE);
         let out_size = (cubes.len() * std::mem::size_of::<LookupResult>()) as u64;
         let output = device.create_buffer(&wgpu::BufferDescriptor {
@@ -528,13 +567,27 @@ impl Pipeline {
                 },
             ],
         });
-        let mut encoder = device.create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.compute);
-            pass.set_bind_group(0, &compute_group, &[]);
-            pass.dispatch_workgroups((cubes.len() as u32).div_ceil(64), 1, 1);
+        let mut first_ray = 0;
+        while first_ray < params.rays {
+            let end_ray = first_ray.saturating_add(per_dispatch.max(1)).min(params.rays);
+            let dispatch = Params {
+                first_ray,
+                end_ray,
+                ..*params
+            };
+            gpu.queue
+                .write_buffer(&params_buffer, 0, bytemuck::bytes_of(&dispatch));
+            let mut encoder = device.create_command_encoder(&Default::default());
+            {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&self.compute);
+                pass.set_bind_group(0, &compute_group, &[]);
+                pass.dispatch_workgroups((cubes.len() as u32).div_ceil(64), 1, 1);
+            }
+            gpu.queue.submit([encoder.finish()]);
+            first_ray = end_ray;
         }
+        let mut encoder = device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(&output, 0, &readback, 0, out_size);
         gpu.queue.submit([encoder.finish()]);
         let slice = readback.slice(..);

@@ -17,6 +17,9 @@ struct Params {
     far: f32,
     d_min: f32,
     d_max: f32,
+    first_ray: u32,      // this dispatch's lookups: directions first_ray..end_ray
+    end_ray: u32,
+    padding: vec2<u32>,
 };
 
 // One hemicube: its centre and local frame; n.w holds the pixel index (bit pattern).
@@ -108,10 +111,13 @@ fn store_depth(@location(0) depth: f32) -> @location(0) vec4<f32> {
 // ---- lookups -------------------------------------------------------------------------------
 
 @group(0) @binding(2) var atlas: texture_2d<f32>;
-// Per hemicube: H, and how many of its lookups saw no surface (within --max-distance).
+// Per hemicube, carried between dispatches: the Kahan sum of 1/d and its carry, how many
+// lookups saw no surface (within --max-distance), and how many were made (checked on the host).
 struct Lookup {
-    hmd: f32,
+    sum: f32,
+    carry: f32,
     escaped: u32,
+    looked: u32,
 }
 @group(0) @binding(3) var<storage, read_write> results: array<Lookup>;
 
@@ -125,10 +131,12 @@ fn lookup(@builtin(global_invocation_id) id: vec3<u32>) {
     let a = params.grid_a;
     let b = params.grid_b;
     let r = params.resolution;
-    var sum = 0.0;
-    var carry = 0.0; // Kahan summation: up to 65,536 terms in f32
-    var escaped = 0u;
-    for (var j = 0u; j < params.rays; j++) {
+    var sum = results[i].sum;
+    var carry = results[i].carry; // Kahan summation: up to 65,536 terms in f32
+    var escaped = results[i].escaped;
+    var looked = results[i].looked;
+    for (var j = params.first_ray; j < params.end_ray; j++) {
+        looked++;
         let u = stratified(j, a, b, random_pair(params.seed, vec2(pixel, 0u), j));
         let w = hemisphere(params.weighting, u);
         let m = abs(w);
@@ -172,10 +180,5 @@ fn lookup(@builtin(global_invocation_id) id: vec3<u32>) {
         carry = (total - sum) - y;
         sum = total;
     }
-    results[i].escaped = escaped;
-    if sum > 0.0 {
-        results[i].hmd = f32(params.rays) / sum;
-    } else {
-        results[i].hmd = bitcast<f32>(0x7f800000u); // every direction escaped: +inf
-    }
+    results[i] = Lookup(sum, carry, escaped, looked);
 }
