@@ -288,15 +288,25 @@ pub(crate) fn checked<T>(device: &wgpu::Device, what: &str, work: impl FnOnce() 
 /// an error naming the buffer, its size and the adapter's limit (wgpu would fail later, less
 /// clearly, or the driver would).
 pub(crate) fn check_buffers(device: &Device, what: &str, buffers: &[(&str, usize)]) -> Result<()> {
-    let binding = device.limits.max_storage_buffer_binding_size;
-    let buffer = device.limits.max_buffer_size;
+    check_buffers_within(&device.limits, &device.adapter_name, what, buffers)
+}
+
+/// [`check_buffers`] against `limits` of the adapter called `adapter_name`.
+pub(crate) fn check_buffers_within(
+    limits: &wgpu::Limits,
+    adapter_name: &str,
+    what: &str,
+    buffers: &[(&str, usize)],
+) -> Result<()> {
+    let binding = limits.max_storage_buffer_binding_size;
+    let buffer = limits.max_buffer_size;
     for &(name, bytes) in buffers {
         let limit = binding.min(buffer);
         if bytes as u64 > limit {
             let message = format!(
                 "{what} needs a {:.1} MB '{name}' buffer; adapter '{}' allows at most {:.1} MB",
                 bytes as f64 / 1e6,
-                device.adapter_name,
+                adapter_name,
                 limit as f64 / 1e6
             );
             return Err(Error::device(DeviceErrorKind::Unsupported, message));

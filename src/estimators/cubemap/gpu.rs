@@ -95,6 +95,8 @@ pub struct Gpu {
     queue: wgpu::Queue,
     pub adapter_name: String,
     max_texture: u32,
+    /// The device's limits, for the buffer checks.
+    limits: wgpu::Limits,
     /// A software implementation (lavapipe): lookups are split into short dispatches.
     software: bool,
 }
@@ -116,6 +118,7 @@ impl Gpu {
             queue,
             adapter_name,
             max_texture: limits.max_texture_dimension_2d,
+            limits,
             software: device_software,
         })
     }
@@ -171,6 +174,23 @@ fn rasterise(
     }
     let capacity = (cols * rows) as usize;
     let atlas_size = (cols * 2 * r, rows * 6 * r);
+    let mesh = &context.scene.mesh;
+    let what = "the cube map";
+    let storage = [
+        ("cubes", capacity * std::mem::size_of::<Cube>()),
+        ("results", capacity * std::mem::size_of::<LookupResult>()),
+    ];
+    crate::gpu::check_buffers_within(&gpu.limits, &gpu.adapter_name, what, &storage)?;
+    // Vertex and index buffers are not storage bindings: only the buffer size limit applies.
+    let unbound = wgpu::Limits {
+        max_storage_buffer_binding_size: gpu.limits.max_buffer_size,
+        ..gpu.limits.clone()
+    };
+    let geometry = [
+        ("vertices", mesh.positions.len() * 12),
+        ("indices", mesh.indices.len() * 12),
+    ];
+    crate::gpu::check_buffers_within(&unbound, &gpu.adapter_name, what, &geometry)?;
     // Catch the device's errors here rather than let wgpu panic on them.
     crate::gpu::checked(&gpu.device, "the cube-map pipeline", || {
         estimate_batches(
