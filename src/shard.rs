@@ -222,12 +222,11 @@ pub fn merge(parts: Vec<Part>) -> Result<Rendered> {
         .iter()
         .enumerate()
         .map(|(index, p)| {
-            let rows = (0..height)
-                .filter(|r| r % reference.count == index as u32)
-                .count() as u64;
-            (rows * width as u64).saturating_sub(p.report.background_pixels as u64) as f64
+            let shard = Shard::new(index as u32, reference.count)?;
+            let rows = (0..height).filter(|&r| shard.has_row(r)).count() as u64;
+            Ok((rows * width as u64).saturating_sub(p.report.background_pixels as u64) as f64)
         })
-        .collect();
+        .collect::<Result<_>>()?;
     report.details.mean_rays_per_pixel = parts
         .iter()
         .zip(&surface)
@@ -235,11 +234,14 @@ pub fn merge(parts: Vec<Part>) -> Result<Rendered> {
         .sum::<Option<f64>>()
         .map(|rays| rays / surface.iter().sum::<f64>().max(1.0));
     // What must be the same in every part to be the image's; where it is not, null.
-    let agreed = |f: fn(&RenderReport) -> String| parts.iter().all(|p| f(&p.report) == f(&parts[0].report));
-    if !agreed(|r| format!("{:?}", r.details.device)) {
+    if parts
+        .iter()
+        .any(|p| p.report.details.device != report.details.device)
+    {
         report.details.device = None;
     }
-    if !agreed(|r| format!("{:?}", r.details.ao_radius.map(f32::to_bits))) {
+    let radius = |r: &RenderReport| r.details.ao_radius.map(f32::to_bits);
+    if parts.iter().any(|p| radius(&p.report) != radius(&report)) {
         report.details.ao_radius = None;
     }
     report.details.grays_per_s = report

@@ -21,6 +21,9 @@ mod select;
 pub use scene::{DispatchSplit, GpuRay, GpuScene};
 pub use select::{select_adapter, AdapterListing, SELECT_GPU};
 
+use crate::error::{DeviceErrorKind, Error, Result};
+use crate::estimators::Backend;
+
 /// The graphics APIs hmdist runs on. (Not GL: wgpu's GL fallback has neither R32Float render
 /// targets nor storage buffers everywhere.)
 const BACKENDS: wgpu::Backends = wgpu::Backends::VULKAN
@@ -83,26 +86,20 @@ fn wgpus_choice(instance: &wgpu::Instance) -> Result<wgpu::Adapter> {
 pub fn adapters() -> Result<(Vec<AdapterListing>, Option<AdapterListing>)> {
     let instance = instance();
     let (_, listed) = enumerate(&instance);
-    let taken = match assigned(&instance)? {
-        Some(adapter) => Some(adapter),
-        None => wgpus_choice(&instance).ok(),
+    let assignment = select::Assignment::from_process();
+    let taken = if assignment.is_empty() {
+        wgpus_choice(&instance).ok().and_then(|a| {
+            let info = AdapterListing::of(0, &a.get_info());
+            listed
+                .iter()
+                .find(|l| (&l.name, &l.pci_bus, &l.backend) == (&info.name, &info.pci_bus, &info.backend))
+                .cloned()
+        })
+    } else {
+        select::choose(&listed, &assignment)?.map(|i| listed[i].clone())
     };
-    let taken = taken.and_then(|a| {
-        let info = a.get_info();
-        listed
-            .iter()
-            .find(|l| {
-                l.name == info.name
-                    && l.pci_bus == info.device_pci_bus_id
-                    && l.backend == format!("{:?}", info.backend)
-            })
-            .cloned()
-    });
     Ok((listed, taken))
 }
-
-use crate::error::{DeviceErrorKind, Error, Result};
-use crate::estimators::Backend;
 
 /// Set to 1 to let `--backend gpu` (and `auto`) run on a software implementation (Mesa's
 /// lavapipe), as `--backend gpu-software` does.
@@ -148,13 +145,11 @@ pub(crate) fn auto_uses_gpu() -> bool {
 }
 
 /// Whether `auto` runs on the GPU: there is a hardware adapter, or any where `software`.
+/// Probed once per process for each.
 fn adapter_for_auto(software: bool) -> bool {
-    if software {
-        static ANY: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-        *ANY.get_or_init(|| Device::open("hmdist probe", true, wgpu::Features::empty()).is_ok())
-    } else {
-        hardware_adapter()
-    }
+    static PROBED: [std::sync::OnceLock<bool>; 2] = [std::sync::OnceLock::new(), std::sync::OnceLock::new()];
+    *PROBED[software as usize]
+        .get_or_init(|| Device::open("hmdist probe", software, wgpu::Features::empty()).is_ok())
 }
 
 /// A wgpu device and what it is called.
@@ -177,9 +172,9 @@ impl Device {
         let info = adapter.get_info();
         if info.device_type == wgpu::DeviceType::Cpu && !allow_software {
             let message = format!(
-                "the only adapter, '{}', is a software implementation (hundreds of times slower \
-                 than a GPU, and slower than the CPU backend): there is no hardware GPU here, or \
-                 its Vulkan driver is not visible; --backend gpu-software (or {SOFTWARE_GPU}=1) \
+                "the adapter, '{}', is a software implementation (hundreds of times slower than \
+                 a GPU, and slower than the CPU backend): no hardware GPU was found or chosen \
+                 (is its Vulkan driver visible?); --backend gpu-software (or {SOFTWARE_GPU}=1) \
                  runs on it anyway",
                 info.name
             );
@@ -321,13 +316,6 @@ pub(crate) fn workgroups(invocations: u32, limit: u32) -> (u32, u32) {
     let groups = invocations.div_ceil(64).max(1);
     let x = groups.min(limit);
     (x, groups.div_ceil(x))
-}
-
-/// Whether this machine has a hardware (not software) Vulkan, Metal or DX12 adapter: what
-/// `--backend auto` asks. Probed once per process.
-pub(crate) fn hardware_adapter() -> bool {
-    static PROBED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *PROBED.get_or_init(|| Device::open("hmdist probe", false, wgpu::Features::empty()).is_ok())
 }
 
 #[cfg(test)]
