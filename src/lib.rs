@@ -61,6 +61,7 @@
 #![warn(missing_docs)]
 
 pub mod accel;
+pub mod backend;
 pub mod error;
 pub mod estimators;
 #[cfg(feature = "experiments")]
@@ -71,6 +72,7 @@ pub mod image;
 pub mod interrupt;
 pub mod memory;
 pub mod metrics;
+pub mod options;
 pub mod points;
 pub mod progress;
 pub mod render;

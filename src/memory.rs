@@ -3,7 +3,7 @@
 //! is, instead of being killed by the operating system minutes in (issue #16).
 //!
 //! The figures are the measured peaks, rounded up: the render's per-pixel buffers
-//! ([`image_bytes`]), the BVH build ([`BVH_BYTES_PER_TRIANGLE`]) and the photon map's build
+//! ([`crate::render::image_bytes`]), the BVH build ([`BVH_BYTES_PER_TRIANGLE`]) and the photon map's build
 //! (`PhotonMethod::peak_build_bytes`).
 //!
 //! What is available is the smaller of the machine's `MemAvailable` and what the process's
@@ -17,9 +17,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::accel::Hit;
 use crate::error::{Error, Result};
-use crate::estimators::AovSample;
 
 /// Peak memory of building the BVH, per triangle, beyond the mesh itself: 290 B measured with
 /// obvhs's best preset on a 5 M-triangle sphere (210 B with our binned SAH builder).
@@ -142,14 +140,6 @@ fn room_below_limit(dir: &Path, (limit, usage, cache): Files) -> Option<u128> {
         })
         .unwrap_or(0);
     Some(limit.saturating_sub(usage.saturating_sub(reclaimable)))
-}
-
-/// Memory a render of `pixels` pixels with `aovs` AOV channels holds at its peak: the
-/// G-buffer, H, the AOV samples and the encoded EXR's channels.
-pub fn image_bytes(pixels: u64, aovs: usize) -> u128 {
-    let samples = if aovs == 0 { 0 } else { size_of::<AovSample>() };
-    let per_pixel = size_of::<Option<Hit>>() + 4 + samples + 2 * 4 * (1 + aovs);
-    pixels as u128 * per_pixel as u128
 }
 
 /// Refuses `needed` bytes for `what` where more than `available` bytes (or, for `None`, the
@@ -332,13 +322,5 @@ mod tests {
         assert_eq!(available_under(&root).unwrap().bound, Bound::Machine);
         std::fs::remove_dir_all(&root).unwrap();
         assert_eq!(available_under(&root), None);
-    }
-
-    #[test]
-    fn an_image_needs_its_g_buffer_and_channels() {
-        let one = image_bytes(1, 0);
-        assert!(one >= size_of::<Option<Hit>>() as u128 + 4, "{one}");
-        assert_eq!(image_bytes(1000, 0), 1000 * one);
-        assert!(image_bytes(1, 2) > one + 2 * 4);
     }
 }

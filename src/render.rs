@@ -11,90 +11,18 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use crate::accel::Hit;
 use crate::accel::{Accel, BuildQuality, Kernel, RayCaster};
 use crate::error::{Error, Result};
-use crate::estimators::{
-    Aov, AovImage, AovSample, DistanceClamp, Estimate, EstimateContext, Estimator, GBuffer, PixelPass,
-    PixelWork, PixelWorker, RayCount, Tally, Work,
-};
+pub use crate::estimators::pass::estimate;
+use crate::estimators::{AovImage, AovSample, DistanceClamp, Estimate, EstimateContext, Estimator, GBuffer};
 use crate::image::HmdImage;
+use crate::options::in_pool;
+pub use crate::options::{RenderOptions, DEFAULT_SEED, DEFAULT_SIZE, MAX_PIXELS};
 use crate::progress::Progress;
 use crate::report::{BoundsReport, CameraReport, LightReport, RenderReport, Seconds};
+use crate::report::{Details, RenderKey, ShardReport};
 use crate::scene::Scene;
-use crate::shard::{Shard, ShardReport};
-
-/// Default image size (SPEC §2).
-pub const DEFAULT_SIZE: (u32, u32) = (1024, 1024);
-/// Default seed of the counter-based random numbers.
-pub const DEFAULT_SEED: u64 = 1;
-/// Largest image accepted: 64 M pixels (the G-buffer alone then takes about 3 GB).
-pub const MAX_PIXELS: u64 = 1 << 26;
-
-/// How to render, apart from the estimator and its parameters. Checked by [`render`]
-/// ([`RenderOptions::validate`]).
-#[derive(Clone, Debug)]
-pub struct RenderOptions {
-    /// Image width in pixels.
-    pub width: u32,
-    /// Image height in pixels.
-    pub height: u32,
-    /// Seed of the counter-based random numbers.
-    pub seed: u64,
-    /// Worker threads; `None` uses every core. Never changes the output.
-    pub threads: Option<usize>,
-    /// Clamp distances (and count escapes) at this value; `None` for no clamp.
-    pub max_distance: Option<f32>,
-    /// The BVH preset.
-    pub bvh_quality: BuildQuality,
-    /// AOVs to measure beside H, each an EXR channel (SPEC §8).
-    pub aovs: Vec<Aov>,
-    /// Render only this shard's rows ([`crate::shard`]); `None` for the whole image.
-    pub shard: Option<Shard>,
-}
-
-impl Default for RenderOptions {
-    fn default() -> Self {
-        RenderOptions {
-            width: DEFAULT_SIZE.0,
-            height: DEFAULT_SIZE.1,
-            seed: DEFAULT_SEED,
-            threads: None,
-            max_distance: None,
-            bvh_quality: BuildQuality::default(),
-            aovs: vec![],
-            shard: None,
-        }
-    }
-}
-
-impl RenderOptions {
-    /// Refuses an empty or oversized image, a non-positive `max_distance` and zero threads.
-    pub fn validate(&self) -> Result<()> {
-        let (w, h) = (self.width, self.height);
-        if w == 0 || h == 0 {
-            let message = format!("{w}x{h} is empty: width and height must be at least 1");
-            return Err(Error::invalid("size", message));
-        }
-        if w as u64 * h as u64 > MAX_PIXELS {
-            let message = format!("{w}x{h} exceeds the limit of {MAX_PIXELS} pixels");
-            return Err(Error::invalid("size", message));
-        }
-        Error::check_positive("max_distance", self.max_distance)?;
-        if self.threads == Some(0) {
-            return Err(Error::invalid("threads", "must be at least 1, not 0"));
-        }
-        Ok(())
-    }
-}
-
-/// Runs `f` on a pool of `threads` workers (`None`: every core).
-pub(crate) fn in_pool<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T> {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.unwrap_or(0))
-        .build()
-        .map_err(|e| Error::parameter(format!("cannot start worker threads: {e}")))?;
-    Ok(pool.install(f))
-}
 
 /// An HMD image and its report (SPEC §7).
 pub struct Rendered {
@@ -105,6 +33,14 @@ pub struct Rendered {
     /// Parameters, statistics and timings; `seconds.load` is 0 until the caller that loaded
     /// the scene adds it ([`RenderReport::add_load_seconds`]).
     pub report: RenderReport,
+}
+
+/// Memory a render of `pixels` pixels with `aovs` AOV channels holds at its peak: the
+/// G-buffer, H, the AOV samples and the encoded EXR's channels.
+pub fn image_bytes(pixels: u64, aovs: usize) -> u128 {
+    let samples = if aovs == 0 { 0 } else { size_of::<AovSample>() };
+    let per_pixel = size_of::<Option<Hit>>() + 4 + samples + 2 * 4 * (1 + aovs);
+    pixels as u128 * per_pixel as u128
 }
 
 /// Renders `scene` with `estimator`. A request whose image or BVH would not fit in the memory
@@ -144,9 +80,8 @@ pub fn render_outputs(
     }
     let pixels = options.width as u64 * options.height as u64;
     let what = format!("{}x{}", options.width, options.height);
-    let needed = crate::memory::image_bytes(pixels, options.aovs.len()) * estimators.len() as u128;
+    let needed = image_bytes(pixels, options.aovs.len()) * estimators.len() as u128;
     crate::memory::check(Some("size"), &what, needed, None)?;
-    crate::memory::check_bvh(scene.mesh.triangle_count())?;
     in_pool(options.threads, || {
         render_in_pool(scene, estimators, options, pass)
     })?
@@ -165,11 +100,8 @@ fn render_in_pool(
         .map(|e| e.expected_rays(pixels))
         .max()
         .unwrap_or(0);
-    let bvh = options
-        .bvh_quality
-        .resolve(pixels + expected, scene.mesh.triangle_count());
     let start = Instant::now();
-    let accel = Accel::build(&scene.mesh, bvh).with_kernel(kernel);
+    let (accel, bvh) = Accel::for_work(&scene.mesh, options.bvh_quality, pixels + expected, kernel)?;
     let accel_build = start.elapsed().as_secs_f64();
     crate::interrupt::check()?;
 
@@ -253,10 +185,14 @@ fn render_in_pool(
                     .chain(options.aovs.iter().map(|a| a.name()))
                     .map(String::from)
                     .collect(),
-                shard: shard.map(|s| ShardReport {
-                    index: s.index,
-                    count: s.count,
-                    fingerprint: crate::shard::fingerprint(scene, *estimator, options),
+                shard: shard.map(|s| {
+                    let key = render_key(scene, *estimator, options, bvh, &estimate.details);
+                    ShardReport {
+                        index: s.index,
+                        count: s.count,
+                        fingerprint: key.fingerprint(),
+                        key: Some(key),
+                    }
                 }),
                 shards: None,
                 parameters: estimator.parameters(),
@@ -271,115 +207,32 @@ fn render_in_pool(
     Ok(outputs.collect())
 }
 
-/// H per pixel of `gbuffer` by `estimator`: its preparation, then the driver's pixel loop (or
-/// the whole image it estimated itself). Runs on the current rayon pool.
-pub fn estimate(
+/// The key of `scene` rendered by `estimator` with `options` through BVH preset `bvh`
+/// (resolved), whose estimate reported `details` (where it ran, the `ao` radius).
+pub fn render_key(
+    scene: &Scene,
     estimator: &dyn Estimator,
-    context: &EstimateContext,
-    gbuffer: &GBuffer,
-    progress: &dyn Progress,
-) -> Result<Estimate> {
-    Ok(match estimator.prepare(context, gbuffer, progress)? {
-        Work::Done(estimate) => *estimate,
-        Work::Pixels { work, phases, rays } => {
-            let (hmd, aovs, pass) = pixel_pass(work.as_ref(), gbuffer, context.aovs, progress)?;
-            let mut phases = phases;
-            work.record_phase(&mut phases, pass.seconds);
-            let pixel_rays = work.casts_rays().then_some(RayCount {
-                cast: pass.tally.rays,
-                escaped: pass.tally.escaped,
-                seconds: pass.seconds,
-            });
-            Estimate {
-                hmd,
-                aovs,
-                rays: rays.or(pixel_rays),
-                phases,
-                details: work.details(&pass),
-            }
-        }
-    })
-}
-
-/// The driver's loop over the estimator's pixels: rows in parallel, one worker (with its
-/// scratch) per rayon job, NaN for background, holes counted, the AOVs in `aovs` kept; progress
-/// in surface pixels, or in [`PixelWork::progress_per_pixel`] steps each. The image does not depend on how rows are split among threads.
-/// [`Error::Interrupted`] if [`crate::interrupt::request`] was called before it finished.
-pub(crate) fn pixel_pass(
-    work: &dyn PixelWork,
-    gbuffer: &GBuffer,
-    aovs: &[Aov],
-    progress: &dyn Progress,
-) -> Result<(Vec<f32>, Vec<AovImage>, PixelPass)> {
-    let start = Instant::now();
-    let width = gbuffer.width as usize;
-    let mut hmd = vec![f32::NAN; gbuffer.points.len()];
-    // Each pixel's AOVs, only where some are asked for.
-    let mut samples = vec![AovSample::default(); if aovs.is_empty() { 0 } else { hmd.len() }];
-    let per_pixel = work.progress_per_pixel();
-    progress.start(work.label(), gbuffer.surface_pixels().saturating_mul(per_pixel));
-    // The driver counts each pixel done, unless the workers count their own steps.
-    let silent = crate::progress::Silent;
-    let counted: &dyn Progress = if per_pixel == 1 { progress } else { &silent };
-    let rows = hmd.par_chunks_mut(width).zip(gbuffer.points.par_chunks(width));
-    let tally = if aovs.is_empty() {
-        rows.enumerate()
-            .map_init(
-                || work.worker(progress),
-                |worker, (row, (out, points))| {
-                    pixel_row(worker.as_mut(), row * width, out, points, None, counted)
-                },
-            )
-            .reduce(Tally::default, |a, b| a + b)
-    } else {
-        rows.zip(samples.par_chunks_mut(width))
-            .enumerate()
-            .map_init(
-                || work.worker(progress),
-                |worker, (row, ((out, points), samples))| {
-                    let samples = Some(samples);
-                    pixel_row(worker.as_mut(), row * width, out, points, samples, counted)
-                },
-            )
-            .reduce(Tally::default, |a, b| a + b)
-    };
-    progress.finish();
-    crate::interrupt::check()?;
-    let pass = PixelPass {
-        tally,
-        pixels: gbuffer.surface_pixels(),
-        seconds: start.elapsed().as_secs_f64(),
-    };
-    Ok((hmd, AovImage::channels(aovs, &samples), pass))
-}
-
-/// One row of the pixel pass, whose first pixel has index `first`; it stops early once an
-/// interruption is requested.
-fn pixel_row(
-    worker: &mut dyn PixelWorker,
-    first: usize,
-    out: &mut [f32],
-    points: &[Option<crate::accel::Hit>],
-    mut samples: Option<&mut [AovSample]>,
-    counted: &dyn Progress,
-) -> Tally {
-    let mut tally = Tally::default();
-    let mut scratch = AovSample::default();
-    for (x, (h, point)) in out.iter_mut().zip(points).enumerate() {
-        if crate::interrupt::requested() {
-            break;
-        }
-        if let Some(hit) = point {
-            let aov = match samples.as_deref_mut() {
-                Some(samples) => &mut samples[x],
-                None => &mut scratch,
-            };
-            *h = worker.pixel(hit, (first + x) as u64, &mut tally, aov);
-            tally.holes += h.is_nan() as u64;
-            counted.advance(1);
-        }
+    options: &RenderOptions,
+    bvh: BuildQuality,
+    details: &Details,
+) -> RenderKey {
+    let device = details.device.as_ref();
+    RenderKey {
+        hmdist_version: env!("CARGO_PKG_VERSION").into(),
+        scene: scene.name.clone(),
+        scene_content: format!("{:016x}", scene.fingerprint()),
+        method: estimator.method().into(),
+        parameters: estimator.parameters(),
+        backend: device.map_or("cpu".into(), |d| d.backend.clone()),
+        adapter_class: device.and_then(|d| d.adapter_class.clone()),
+        bvh: bvh.name().into(),
+        width: options.width,
+        height: options.height,
+        seed: options.seed,
+        max_distance: options.max_distance,
+        aovs: options.aovs.iter().map(|a| a.name().into()).collect(),
+        ao_radius: details.ao_radius,
     }
-    tally
 }
 
 /// Each pixel's first hit along its camera ray (SPEC §2), normal flipped to face the camera.
@@ -418,5 +271,18 @@ pub fn primary_hits_where(
         width,
         height,
         points,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_image_needs_its_g_buffer_and_channels() {
+        let one = image_bytes(1, 0);
+        assert!(one >= size_of::<Option<Hit>>() as u128 + 4, "{one}");
+        assert_eq!(image_bytes(1000, 0), 1000 * one);
+        assert!(image_bytes(1, 2) > one + 2 * 4);
     }
 }

@@ -5,7 +5,6 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::estimators::photon::SourceKind;
 use crate::sampling::Weighting;
 
 /// One rendered image's report: the JSON sidecar.
@@ -59,10 +58,10 @@ pub struct RenderReport {
     pub channels: Vec<String>,
     /// The shard this part is, for `hmdist merge`; absent for a whole image.
     #[serde(skip_serializing_if = "Option::is_none", default)]
-    pub shard: Option<crate::shard::ShardReport>,
+    pub shard: Option<ShardReport>,
     /// A merged image's shards and their timings; absent otherwise.
     #[serde(skip_serializing_if = "Option::is_none", default)]
-    pub shards: Option<Vec<crate::shard::ShardTiming>>,
+    pub shards: Option<Vec<ShardTiming>>,
     /// The method's parameters.
     #[serde(flatten)]
     pub parameters: Parameters,
@@ -117,6 +116,106 @@ impl RenderReport {
     pub fn to_json(&self) -> String {
         serde_json::to_string_pretty(self).expect("a report serialises")
     }
+}
+
+/// What a shard's report says about it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ShardReport {
+    /// Which shard, from 0.
+    pub index: u32,
+    /// How many shards.
+    pub count: u32,
+    /// Hash of everything that determines the pixels: of [`ShardReport::key`].
+    pub fingerprint: String,
+    /// Everything that determines the pixels; absent from reports written before it was
+    /// added (`merge` then compares fingerprints alone).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub key: Option<RenderKey>,
+}
+
+/// Everything that determines a render's pixels, and nothing that does not (threads,
+/// timings, a shard's own rows): two renders with equal keys give the same pixels bit for bit.
+/// A shard carries its key, and `hmdist merge` joins only parts whose keys are equal, naming
+/// the fields that differ ([`RenderKey::differences`]); the render driver makes it
+/// ([`crate::render::render_key`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RenderKey {
+    /// The hmdist that rendered it.
+    pub hmdist_version: String,
+    /// The scene's name.
+    pub scene: String,
+    /// Hash of the scene's content: vertices, triangles, camera, light, display scale
+    /// ([`crate::scene::Scene::fingerprint`]).
+    pub scene_content: String,
+    /// The estimator's registry name.
+    pub method: String,
+    /// The method's parameters, as the report writes them.
+    #[serde(flatten)]
+    pub parameters: Parameters,
+    /// Where it ran: `cpu` or `gpu` (resolved: never `auto`).
+    pub backend: String,
+    /// The GPU adapter's class, `hardware` or `software`; `null` on the CPU. (Hardware and
+    /// software GPUs round differently in the last bits.)
+    pub adapter_class: Option<String>,
+    /// The BVH preset built (resolved: never `auto`).
+    pub bvh: String,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Seed of the random numbers.
+    pub seed: u64,
+    /// Distance clamp; `null` for none.
+    pub max_distance: Option<f32>,
+    /// The AOV channels, in order.
+    pub aovs: Vec<String>,
+    /// The `ao` AOV's radius, where it was computed.
+    pub ao_radius: Option<f32>,
+}
+
+impl RenderKey {
+    /// A short hash of the key, the same on every machine.
+    pub fn fingerprint(&self) -> String {
+        let json = serde_json::to_string(self).expect("a key serialises");
+        format!("{:016x}", crate::scene::stable_hash(json.as_bytes()))
+    }
+
+    /// The fields whose values differ from `other`'s, each as `name (this value against
+    /// other's)`, in alphabetical order; empty where the keys are equal.
+    pub fn differences(&self, other: &RenderKey) -> Vec<String> {
+        use serde_json::Value;
+        let (Value::Object(mine), Value::Object(theirs)) = (to_value(self), to_value(other)) else {
+            unreachable!("a key serialises to an object")
+        };
+        let absent = Value::Null;
+        let mut names: Vec<&String> = mine.keys().collect();
+        names.extend(theirs.keys().filter(|k| !mine.contains_key(*k)));
+        names
+            .into_iter()
+            .filter_map(|name| {
+                let (a, b) = (
+                    mine.get(name).unwrap_or(&absent),
+                    theirs.get(name).unwrap_or(&absent),
+                );
+                (a != b).then(|| format!("{name} ({a} against {b})"))
+            })
+            .collect()
+    }
+}
+
+fn to_value(key: &RenderKey) -> serde_json::Value {
+    serde_json::to_value(key).expect("a key serialises")
+}
+
+/// One shard's timings in a merged report.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ShardTiming {
+    /// Which shard.
+    pub index: u32,
+    /// Its total seconds.
+    pub seconds: f64,
+    /// Rays it cast, where the method counts them.
+    pub rays_cast: Option<u64>,
 }
 
 /// An axis-aligned box.
@@ -273,6 +372,30 @@ pub struct PhotonParameters {
     pub normal_filter_cos: f32,
 }
 
+/// Where photon paths start.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
+)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum SourceKind {
+    /// The scene's spot light.
+    #[default]
+    Light,
+    /// The camera, through random image positions.
+    Camera,
+}
+
+impl SourceKind {
+    /// The name the CLI and the report use.
+    pub fn name(self) -> &'static str {
+        match self {
+            SourceKind::Light => "light",
+            SourceKind::Camera => "camera",
+        }
+    }
+}
+
 /// A method's own figures; each group is there for the methods that measure it.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct Details {
@@ -307,6 +430,10 @@ pub struct DeviceDetails {
     pub backend: String,
     /// The GPU adapter; `null` for the CPU backend.
     pub adapter: Option<String>,
+    /// `hardware` or `software` (Mesa's lavapipe): the GPU adapter's class, which a shard's
+    /// key holds (the two classes' images differ in the last bits); `null` for the CPU.
+    #[serde(default)]
+    pub adapter_class: Option<String>,
 }
 
 impl DeviceDetails {
@@ -315,14 +442,16 @@ impl DeviceDetails {
         DeviceDetails {
             backend: "cpu".into(),
             adapter: None,
+            adapter_class: None,
         }
     }
 
-    /// The GPU backend on `adapter`.
-    pub fn gpu(adapter: &str) -> Self {
+    /// The GPU backend on `adapter`, a software implementation where `software`.
+    pub fn gpu(adapter: &str, software: bool) -> Self {
         DeviceDetails {
             backend: "gpu".into(),
             adapter: Some(adapter.into()),
+            adapter_class: Some(if software { "software" } else { "hardware" }.into()),
         }
     }
 }

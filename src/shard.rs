@@ -3,96 +3,21 @@
 //! Shard `K/M` renders the rows `r` with `r mod M = K` (interleaved, so every shard gets its
 //! share of cheap and expensive rows); its EXR is full size with the other rows NaN. Random
 //! numbers are keyed by (seed, pixel, ray) and the BVH preset is chosen for the whole image,
-//! so a shard's pixels equal the one-machine render's. A shard's report carries a fingerprint
-//! of everything that determines the pixels (the scene's content, camera and light, the
-//! method and its parameters, size, seed, distance clamp, AOVs and hmdist's version);
-//! [`merge`] refuses parts whose fingerprints differ, a missing or repeated shard, and writes
-//! the merged report's sums of rays, escapes and seconds with each shard's timings.
-
-use serde::{Deserialize, Serialize};
+//! so a shard's pixels equal the one-machine render's. A shard's report carries the render's
+//! key ([`crate::report::RenderKey`]: the scene's content, camera and light, the method and
+//! its parameters, the backend and adapter class it ran on, the BVH preset, size, seed,
+//! distance clamp, AOVs with the `ao` radius, and hmdist's version) and its fingerprint;
+//! [`merge`] refuses parts whose keys differ (naming the fields), a missing or repeated
+//! shard, and writes the merged report's sums of rays, escapes and seconds with each shard's
+//! timings.
 
 use crate::error::{Error, Result};
-use crate::estimators::{AovImage, Estimator};
+use crate::estimators::AovImage;
 use crate::image::HmdImage;
-use crate::render::{RenderOptions, Rendered};
+pub use crate::options::Shard;
+use crate::render::Rendered;
 use crate::report::{CubemapDetails, PhaseSeconds, RenderReport};
-use crate::scene::{stable_hash, Scene};
-
-/// Shard `index` of `count`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Shard {
-    /// Which shard, from 0.
-    pub index: u32,
-    /// How many shards.
-    pub count: u32,
-}
-
-impl Shard {
-    /// Shard `index` of `count`: `index < count`.
-    pub fn new(index: u32, count: u32) -> Result<Shard> {
-        if count == 0 || index >= count {
-            let message = format!("{index}/{count} is not a shard: K/M needs 0 <= K < M");
-            return Err(Error::invalid("shard", message));
-        }
-        Ok(Shard { index, count })
-    }
-
-    /// `K/M`, e.g. `0/4`.
-    pub fn parse(text: &str) -> Result<Shard> {
-        let bad = || Error::invalid("shard", format!("'{text}' is not K/M, e.g. 0/4"));
-        let (k, m) = text.split_once('/').ok_or_else(bad)?;
-        Shard::new(
-            k.trim().parse().map_err(|_| bad())?,
-            m.trim().parse().map_err(|_| bad())?,
-        )
-    }
-
-    /// Whether image row `row` is this shard's.
-    pub fn has_row(&self, row: u32) -> bool {
-        row % self.count == self.index
-    }
-}
-
-/// What a shard's report says about it.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ShardReport {
-    /// Which shard, from 0.
-    pub index: u32,
-    /// How many shards.
-    pub count: u32,
-    /// Hash of everything that determines the pixels.
-    pub fingerprint: String,
-}
-
-/// One shard's timings in a merged report.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ShardTiming {
-    /// Which shard.
-    pub index: u32,
-    /// Its total seconds.
-    pub seconds: f64,
-    /// Rays it cast, where the method counts them.
-    pub rays_cast: Option<u64>,
-}
-
-/// The fingerprint of a render: everything that determines its pixels, and nothing that
-/// does not (threads, the shard itself).
-pub fn fingerprint(scene: &Scene, estimator: &dyn Estimator, options: &RenderOptions) -> String {
-    let parameters = serde_json::to_string(&estimator.parameters()).expect("parameters serialise");
-    let key = format!(
-        "{}|{}|{:016x}|{}|{parameters}|{}x{}|{}|{:?}|{:?}",
-        env!("CARGO_PKG_VERSION"),
-        scene.name,
-        scene.fingerprint(),
-        estimator.method(),
-        options.width,
-        options.height,
-        options.seed,
-        options.max_distance.map(f32::to_bits),
-        options.aovs,
-    );
-    format!("{:016x}", stable_hash(key.as_bytes()))
-}
+pub use crate::report::{ShardReport, ShardTiming};
 
 /// One shard's output, as read back from its files.
 pub struct Part {
@@ -119,17 +44,7 @@ pub fn merge(parts: Vec<Part>) -> Result<Rendered> {
     let mut slots: Vec<Option<Part>> = (0..reference.count).map(|_| None).collect();
     for part in parts {
         let shard = shard_of(&part)?;
-        if shard.fingerprint != reference.fingerprint || shard.count != reference.count {
-            let message = format!(
-                "the parts are not of one render: shard {}/{} has fingerprint {}, shard {}/{} has {} \
-                 (scene, camera, method, parameters, size, seed or version differ)",
-                reference.index,
-                reference.count,
-                reference.fingerprint,
-                shard.index,
-                shard.count,
-                shard.fingerprint
-            );
+        if let Some(message) = not_one_render(&reference, &shard) {
             return Err(Error::parameter(message));
         }
         let slot = &mut slots[shard.index as usize];
@@ -264,4 +179,33 @@ pub fn merge(parts: Vec<Part>) -> Result<Rendered> {
             .collect(),
     );
     Ok(Rendered { image, aovs, report })
+}
+
+/// Why shards `a` and `b` are not parts of one render, or `None` where they are: a different
+/// shard count, or keys that differ (named field by field); parts whose reports predate keys
+/// are compared by fingerprint.
+fn not_one_render(a: &ShardReport, b: &ShardReport) -> Option<String> {
+    let (ia, ib) = (
+        format!("{}/{}", a.index, a.count),
+        format!("{}/{}", b.index, b.count),
+    );
+    if a.count != b.count {
+        return Some(format!(
+            "the parts are not of one render: shard {ia} and shard {ib} split it differently"
+        ));
+    }
+    let differences = match (&a.key, &b.key) {
+        (Some(ka), Some(kb)) => ka.differences(kb),
+        _ if a.fingerprint == b.fingerprint => vec![],
+        _ => vec![format!(
+            "fingerprint ({} against {}: scene, camera, method, parameters, backend, size, seed or version)",
+            a.fingerprint, b.fingerprint
+        )],
+    };
+    (!differences.is_empty()).then(|| {
+        format!(
+            "the parts are not of one render: shard {ia} and shard {ib} differ in {}",
+            differences.join(", ")
+        )
+    })
 }

@@ -93,6 +93,7 @@ fn cubemap_on_the_cpu_counts_texel_rays_and_lookups() {
     assert_common_keys(&r, "cubemap", &["cubemap_build_and_lookup"]);
     assert_eq!((&r["rays"], &r["backend"]), (&json!(RAYS), &json!("cpu")));
     assert_null(&r, "adapter");
+    assert_null(&r, "adapter_class");
     // One ray per texel looked up: at least one and at most N per pixel.
     let cast = r["rays_cast"].as_u64().unwrap();
     assert!((SURFACE_PIXELS..=RAYS * SURFACE_PIXELS).contains(&cast), "{cast}");
@@ -125,6 +126,12 @@ fn cubemap_on_the_gpu_casts_no_rays_and_counts_what_it_rasterises_and_looks_up()
     assert_common_keys(&r, "cubemap", &["cubemap_build", "cubemap_lookup"]);
     assert_eq!((&r["rays"], &r["backend"]), (&json!(RAYS), &json!("gpu")));
     assert!(r["adapter"].is_string());
+    // lavapipe (CI's adapter) is Mesa's software Vulkan; any other is hardware.
+    let lavapipe = r["adapter"].as_str().unwrap().contains("llvmpipe");
+    assert_eq!(
+        r["adapter_class"],
+        json!(if lavapipe { "software" } else { "hardware" })
+    );
     for key in ["rays_cast", "escaped_rays", "mrays_per_s"] {
         assert_null(&r, key);
     }

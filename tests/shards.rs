@@ -227,6 +227,55 @@ fn merge_refuses_a_missing_a_repeated_and_a_foreign_part_and_writes_nothing() {
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--shard"));
 }
 
+/// Parts that differ only where the old fingerprint did not look (the `ao` radius, the
+/// backend) are not one image: merge refuses them and names the field.
+#[test]
+fn merge_refuses_parts_of_another_ao_radius_or_backend_and_names_the_field() {
+    let test = "merge_refuses_parts_of_another_ao_radius_or_backend_and_names_the_field";
+    let dir = Scratch::new("shards-keys");
+    let render = |shard: &str, out: &str, extra: &[&str]| {
+        let mut args = vec!["render", "--quiet", "--size", "16x9", "--rays", "8"];
+        args.extend_from_slice(&["--shard", shard, "--out", out]);
+        args.extend_from_slice(extra);
+        hmdist(dir.path(), &args)
+    };
+    let cpu = |radius| ["--backend", "cpu", "--aov", "ao", "--ao-radius", radius];
+    for k in 0..4 {
+        let out = render(&format!("{k}/4"), &format!("ao{k}.exr"), &cpu("1"));
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    }
+    assert!(render("3/4", "ao3-radius2.exr", &cpu("2")).status.success());
+    let merge = |last: &str| {
+        let args = ["merge", "out.exr", "ao0.exr", "ao1.exr", "ao2.exr", last];
+        hmdist(dir.path(), &args)
+    };
+    // The control: the same four parts with one radius merge.
+    assert!(merge("ao3.exr").status.success());
+    std::fs::remove_file(dir.join("out.exr")).unwrap();
+    std::fs::remove_file(dir.join("out.json")).unwrap();
+    let refused = merge("ao3-radius2.exr");
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("ao_radius (1.0 against 2.0)"), "{stderr}");
+    assert!(!dir.join("out.exr").exists());
+
+    let gpu = ["--backend", "gpu-software", "--aov", "ao", "--ao-radius", "1"];
+    let gpu = render("3/4", "gpu3.exr", &gpu);
+    let stderr = String::from_utf8_lossy(&gpu.stderr);
+    if !gpu.status.success() && common::gpu_missing(test, &stderr) {
+        return;
+    }
+    assert!(gpu.status.success(), "{stderr}");
+    let refused = merge("gpu3.exr");
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("backend (\"cpu\" against \"gpu\")"), "{stderr}");
+    assert!(
+        stderr.contains("adapter_class (null against \"software\")"),
+        "{stderr}"
+    );
+}
+
 #[test]
 fn a_photon_map_built_once_gives_every_shard_the_one_machine_pixels() {
     let dir = Scratch::new("shards-photon-map");

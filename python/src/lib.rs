@@ -195,7 +195,9 @@ impl PyScene {
         }
         let kernel = Kernel::from_env().map_err(py_error)?;
         let mesh = &self.scene.mesh;
-        let accel = py.detach(|| Accel::build(mesh, BuildQuality::Fast).with_kernel(kernel));
+        let (accel, _) = py
+            .detach(|| Accel::for_work(mesh, BuildQuality::Fast, 0, kernel))
+            .map_err(py_error)?;
         Ok(self.accel.get_or_init(|| accel))
     }
 }

@@ -24,6 +24,7 @@ use super::traverse::{closest, stack_size, Closest, Counter, Entry, TraversalSta
 use super::triangle::barycentric_point_error;
 use super::wide::{BinaryBuilder, WideBvh, WIDTH};
 use super::{Hit, RayCaster, PACKET};
+use crate::error::Result;
 use crate::scene::Mesh;
 
 /// BVH build presets: build time against trace speed.
@@ -121,6 +122,21 @@ impl Accel {
             kernel: Kernel::from_env().unwrap_or_else(|_| Kernel::best()),
             location,
         }
+    }
+
+    /// The accelerator for a job that casts about `rays` rays, built the one way every job
+    /// builds it: the preset `quality` resolved for that work ([`BuildQuality::resolve`]), the
+    /// memory the build takes checked first ([`crate::memory::check_bvh`]), then the build,
+    /// traversed by `kernel`. Returns it with the preset it built.
+    pub fn for_work(
+        mesh: &Mesh,
+        quality: BuildQuality,
+        rays: u64,
+        kernel: Kernel,
+    ) -> Result<(Accel, BuildQuality)> {
+        let quality = quality.resolve(rays, mesh.triangle_count());
+        crate::memory::check_bvh(mesh.triangle_count())?;
+        Ok((Accel::build(mesh, quality).with_kernel(kernel), quality))
     }
 
     /// The same BVH traversed by `kernel`, which this CPU must be able to run.

@@ -44,6 +44,8 @@ pub use float_error::offset_ray_origin;
 pub use kernel::Kernel;
 pub use traverse::TraversalStats;
 
+use crate::sampling::Frame;
+
 /// A ray's first hit, with what a secondary ray needs to leave the surface robustly.
 #[derive(Clone, Copy, Debug)]
 pub struct Hit {
@@ -64,6 +66,27 @@ impl Hit {
     #[inline]
     pub fn spawn_origin(&self, w: Vec3) -> Vec3 {
         offset_ray_origin(self.point, self.point_error, self.normal, w)
+    }
+}
+
+/// A gather's start: the origin offset off the surface, the frame of the normal whose
+/// hemisphere is sampled, and the triangle the rays leave (`None` where it is not known).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct GatherStart {
+    pub origin: Vec3,
+    /// The frame around the normal whose hemisphere is sampled.
+    pub frame: Frame,
+    pub leaving: Option<u32>,
+}
+
+impl GatherStart {
+    /// The start at a primary hit, its normal already facing the camera.
+    pub fn at_hit(hit: &Hit) -> Self {
+        GatherStart {
+            origin: hit.spawn_origin(hit.normal),
+            frame: Frame::from_normal(hit.normal),
+            leaving: Some(hit.triangle),
+        }
     }
 }
 
@@ -94,6 +117,10 @@ pub trait RayCaster: Sync {
         }
     }
 }
+
+/// Children per node of the wide BVH, and triangles per leaf block: what the SAH builder
+/// (`sah.rs`) fills a leaf up to and the collapse (`wide.rs`) packs.
+pub const WIDTH: usize = 8;
 
 /// The most rays [`RayCaster::hit_distances`] casts at once: one per AVX2 lane.
 pub const PACKET: usize = 8;

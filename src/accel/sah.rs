@@ -24,7 +24,7 @@ use obvhs::triangle::Triangle;
 /// Bins per axis.
 const BINS: usize = 32;
 /// Most triangles in a leaf: one block of the wide BVH.
-const MAX_LEAF: usize = super::wide::WIDTH;
+const MAX_LEAF: usize = super::WIDTH;
 /// Cost of a node visit against one triangle test in the SAH. A leaf block of up to eight
 /// triangles costs one kernel call however full it is, so leaves are kept rather full.
 const TRAVERSAL_COST: f32 = 4.0;

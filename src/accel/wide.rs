@@ -28,8 +28,7 @@ use obvhs::BvhBuildParams;
 
 use crate::scene::Mesh;
 
-/// Children per node and triangles per leaf block.
-pub const WIDTH: usize = 8;
+pub use super::WIDTH;
 
 /// A child slot that holds nothing: its box is empty (`lo = +inf`, `hi = −inf`), which every
 /// kernel's slab test rejects.

@@ -82,9 +82,7 @@ pub fn run(args: PointsArgs) -> Result<()> {
     scene.validate()?;
     bar.status("BVH");
     let rays = points.len() as u64 * args.rays as u64;
-    let quality = BuildQuality::Auto.resolve(rays, scene.mesh.triangle_count());
-    hmdist::memory::check_bvh(scene.mesh.triangle_count())?;
-    let accel = Accel::build(&scene.mesh, quality).with_kernel(Kernel::from_env()?);
+    let (accel, _) = Accel::for_work(&scene.mesh, BuildQuality::Auto, rays, Kernel::from_env()?)?;
     bar.status("gather");
     let start = std::time::Instant::now();
     let hmd = hmd_at(&scene, &accel, &query, &points, None)?;

@@ -8,48 +8,7 @@
 //!   within the AO radius;
 //! - `escaped`: the fraction of rays that met nothing.
 
-use crate::error::{Error, Result};
-
-/// One AOV.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
-#[serde(rename_all = "lowercase")]
-pub enum Aov {
-    /// Relative standard error of H, from independent rounds.
-    Relerr,
-    /// Rays cast for the pixel.
-    Rays,
-    /// The smallest hit distance over the pixel's rays.
-    Dmin,
-    /// Cosine-weighted fraction of directions that meet nothing within the AO radius.
-    Ao,
-    /// Fraction of rays that met nothing.
-    Escaped,
-}
-
-impl Aov {
-    /// Every AOV, in channel order.
-    pub const ALL: [Aov; 5] = [Aov::Relerr, Aov::Rays, Aov::Dmin, Aov::Ao, Aov::Escaped];
-
-    /// The EXR channel's name.
-    pub fn name(self) -> &'static str {
-        match self {
-            Aov::Relerr => "relerr",
-            Aov::Rays => "rays",
-            Aov::Dmin => "dmin",
-            Aov::Ao => "ao",
-            Aov::Escaped => "escaped",
-        }
-    }
-
-    /// The AOV called `name`.
-    pub fn parse(name: &str) -> Result<Aov> {
-        Aov::ALL.into_iter().find(|a| a.name() == name).ok_or_else(|| {
-            let names: Vec<&str> = Aov::ALL.iter().map(|a| a.name()).collect();
-            Error::invalid("aov", format!("'{name}' is not one of {}", names.join(", ")))
-        })
-    }
-}
+pub use crate::options::Aov;
 
 /// One pixel's AOVs; NaN where not measured.
 #[derive(Clone, Copy, Debug, PartialEq)]

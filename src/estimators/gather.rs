@@ -16,16 +16,18 @@
 
 use glam::Vec3;
 
-use super::Backend;
 use super::{
     Aov, AovSample, DistanceClamp, EstimateContext, Estimator, GBuffer, HarmonicMean, PixelPass, PixelWork,
     PixelWorker, Tally, Work,
 };
+pub(crate) use crate::accel::GatherStart;
 use crate::accel::{Hit, RayCaster, PACKET};
+use crate::backend::Backend;
+pub use crate::backend::DispatchSplit;
 use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::report::{Details, DeviceDetails, GatherParameters, Parameters};
-use crate::sampling::{hemisphere, in_stratum, strata, Frame, Stream, Weighting};
+use crate::sampling::{hemisphere, in_stratum, strata, Stream, Weighting};
 
 /// Default gather rays per pixel for `hmdist render`: an 8 × 8 stratified grid, a clean
 /// picture of `cube` at 1024² in about 10 s on 2 cores. The paper's reference uses 65,536;
@@ -44,44 +46,8 @@ pub struct Gather {
     split: Option<DispatchSplit>,
 }
 
-/// How a gather's work is split into dispatches: at most `points` points and `rays` rays per
-/// point each. The result does not depend on it (tests check this); without
-/// [`Gather::with_dispatch_split`], dispatches take about half a second each.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct DispatchSplit {
-    /// Points per dispatch.
-    pub points: u32,
-    /// Rays per point per dispatch.
-    pub rays: u32,
-    /// Lets `rays` exceed what a software adapter's loop cap allows (16 rays per point per
-    /// dispatch on lavapipe): for the test that a loop cut short is caught, not turned into
-    /// an image.
-    pub past_software_cap: bool,
-}
-
 /// Rounds of gather rays when the `relerr` AOV is asked for and no rounds are named.
 pub const DEFAULT_ERROR_ROUNDS: u32 = 8;
-
-/// A gather's start: the origin offset off the surface, the frame of the normal whose
-/// hemisphere is sampled, and the triangle the rays leave (`None` where it is not known).
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct GatherStart {
-    pub origin: Vec3,
-    /// The frame around the normal whose hemisphere is sampled.
-    pub frame: Frame,
-    pub leaving: Option<u32>,
-}
-
-impl GatherStart {
-    /// The start at a primary hit, its normal already facing the camera.
-    pub fn at_hit(hit: &Hit) -> Self {
-        GatherStart {
-            origin: hit.spawn_origin(hit.normal),
-            frame: Frame::from_normal(hit.normal),
-            leaving: Some(hit.triangle),
-        }
-    }
-}
 
 impl Gather {
     /// `rays` gather rays per point (at least 1), weighted by `weighting`.
@@ -155,14 +121,34 @@ impl Gather {
         seed: u64,
         clamp: DistanceClamp,
         ao_radius: Option<f32>,
-    ) -> crate::gpu::gather::GatherJob<'_> {
+    ) -> crate::gpu::gather::GatherJob {
         crate::gpu::gather::GatherJob {
-            gather: self,
+            rays: self.rays,
+            rounds: self.rounds,
+            weighting: self.weighting,
             seed,
-            clamp,
+            d_min: clamp.min,
+            t_max: clamp.max,
             ao_radius,
             split: self.split,
         }
+    }
+
+    /// The point's figures from a GPU gather of this gather with `ao_radius`.
+    #[cfg(feature = "gpu")]
+    pub(crate) fn point_from_gpu(
+        &self,
+        ao_radius: Option<f32>,
+        gpu: crate::gpu::gather::GpuPoint,
+    ) -> PointGather {
+        PointGather::from_rounds(
+            self.weighting,
+            ao_radius,
+            gpu.round_sums.iter().copied(),
+            self.rays / self.rounds,
+            (gpu.escaped, gpu.dmin),
+            gpu.ao,
+        )
     }
 
     /// Independent rounds the rays are cast in.
@@ -266,7 +252,7 @@ impl Estimator for Gather {
         let ao = self.ao_radius(context)?;
         #[cfg(feature = "gpu")]
         if let Some(gpu) = self.gpu(context.accel)? {
-            return crate::gpu::gather::estimate(&gpu, self, context, gbuffer, ao, progress)
+            return estimate_on_gpu(&gpu, self, context, gbuffer, ao, progress)
                 .map(|e| Work::Done(Box::new(e)));
         }
         #[cfg(not(feature = "gpu"))]
@@ -289,6 +275,79 @@ impl Estimator for Gather {
             rays: None,
         })
     }
+}
+
+/// `gather` on the GPU over the whole image: H, the AOVs asked for, and what it took.
+#[cfg(feature = "gpu")]
+fn estimate_on_gpu(
+    scene: &crate::gpu::GpuScene,
+    gather: &Gather,
+    context: &EstimateContext,
+    gbuffer: &GBuffer,
+    ao: AoRadius,
+    progress: &dyn Progress,
+) -> Result<super::Estimate> {
+    use crate::gpu::gather::gather_points;
+    use crate::report::PhaseSeconds;
+
+    let (pixels, starts): (Vec<usize>, Vec<GatherStart>) = gbuffer
+        .points
+        .iter()
+        .enumerate()
+        .filter_map(|(i, p)| p.as_ref().map(|hit| (i, GatherStart::at_hit(hit))))
+        .unzip();
+    let key = |i: usize| pixels[i] as u64;
+    let mut extra = 0.0;
+    let ao_radius = match ao {
+        AoRadius::None => None,
+        AoRadius::Given(r) => Some(r),
+        AoRadius::Median => {
+            // The default radius is the median of H: a first pass finds it.
+            let job = gather.gpu_job(context.seed, context.clamp, None);
+            let first = gather_points(scene, &job, &starts, key, progress, |p| {
+                gather.point_from_gpu(None, p).mean.value()
+            })?;
+            extra = first.trace_seconds;
+            Some(median_finite(first.points))
+        }
+    };
+    let job = gather.gpu_job(context.seed, context.clamp, ao_radius);
+    let done = gather_points(scene, &job, &starts, key, progress, |p| {
+        gather.point_from_gpu(ao_radius, p)
+    })?;
+
+    let mut hmd = vec![f32::NAN; gbuffer.points.len()];
+    let mut samples = vec![AovSample::default(); if context.aovs.is_empty() { 0 } else { hmd.len() }];
+    let mut tally = Tally::default();
+    let mut scratch = AovSample::default();
+    for (&pixel, point) in pixels.iter().zip(&done.points) {
+        hmd[pixel] = point.mean.value();
+        let aov = samples.get_mut(pixel).unwrap_or(&mut scratch);
+        point.finish(&mut tally, aov);
+    }
+    let aovs = super::AovImage::channels(context.aovs, &samples);
+    let trace_seconds = done.trace_seconds + extra;
+    Ok(super::Estimate {
+        hmd,
+        rays: Some(super::RayCount {
+            cast: tally.rays,
+            escaped: tally.escaped,
+            seconds: done.trace_seconds,
+        }),
+        phases: PhaseSeconds {
+            gpu_upload: Some(scene.upload_seconds + done.upload_seconds),
+            gpu_trace: Some(trace_seconds),
+            gpu_readback: Some(done.readback_seconds),
+            ..PhaseSeconds::default()
+        },
+        aovs,
+        details: Details {
+            ao_radius,
+            device: Some(DeviceDetails::gpu(scene.adapter(), scene.device.software)),
+            grays_per_s: Some(tally.rays as f64 / done.trace_seconds.max(1e-9) / 1e9),
+            ..Details::default()
+        },
+    })
 }
 
 /// The `ao` AOV's radius, where it is asked for.
@@ -344,7 +403,7 @@ fn median_hmd(
         context: &first,
         ao_radius: None,
     };
-    let (hmd, _, _) = crate::render::pixel_pass(&pass, gbuffer, &[], progress)?;
+    let (hmd, _, _) = super::pass::pixel_pass(&pass, gbuffer, &[], progress)?;
     Ok(median_finite(hmd))
 }
 

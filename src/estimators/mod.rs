@@ -20,12 +20,14 @@ pub mod aov;
 pub mod cubemap;
 pub mod gather;
 mod harmonic;
+pub mod pass;
 pub mod photon;
 pub mod registry;
 
+pub use crate::backend::Backend;
 pub use adaptive::Adaptive;
 pub use aov::{Aov, AovImage, AovSample};
-pub use cubemap::{Backend, Cubemap};
+pub use cubemap::Cubemap;
 pub use gather::Gather;
 pub use harmonic::{DistanceClamp, HarmonicMean};
 pub use photon::PhotonEstimator;

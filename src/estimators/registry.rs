@@ -4,10 +4,11 @@
 
 use super::adaptive::{self, Adaptive};
 use super::aov::Aov;
-use super::cubemap::{self, Backend, Cubemap};
+use super::cubemap::{self, Cubemap};
 use super::gather::{self, Gather, DEFAULT_ERROR_ROUNDS};
 use super::photon::{self, PathRules, PhotonEstimator, PhotonMethod, PhotonParams, SourceKind};
 use super::Estimator;
+use crate::backend::Backend;
 use crate::error::{Error, Result};
 use crate::sampling::Weighting;
 

@@ -10,14 +10,11 @@ use std::time::Instant;
 
 use bytemuck::{Pod, Zeroable};
 
-use super::scene::{leaving_bits, shader_t_max, DispatchSplit, GpuScene};
+use super::scene::{leaving_bits, shader_t_max, GpuScene};
+use crate::accel::GatherStart;
+use crate::backend::DispatchSplit;
 use crate::error::{DeviceErrorKind, Error, Result};
-use crate::estimators::gather::{median_finite, AoRadius, GatherStart, PointGather};
-use crate::estimators::{
-    AovImage, AovSample, DistanceClamp, Estimate, EstimateContext, GBuffer, Gather, RayCount, Tally,
-};
 use crate::progress::Progress;
-use crate::report::{Details, DeviceDetails, PhaseSeconds};
 use crate::sampling::{strata, Weighting};
 
 /// Points per dispatch at most: 1 M points hold 64 MB of starts and 32 MB of state.
@@ -68,37 +65,62 @@ struct State {
     padding: u32,
 }
 
-/// A gather on the GPU: each point's figures and the seconds of each step.
-pub(crate) struct GpuGather {
+// The twins' sizes, checked as the crate compiles; the test below checks every member's offset
+// against the shader's.
+const _: () = assert!(std::mem::size_of::<Params>() == 64);
+const _: () = assert!(std::mem::size_of::<State>() == 32);
+const _: () = assert!(std::mem::size_of::<[[f32; 4]; 4]>() == 64);
+
+/// A gather on the GPU: each point's figures (as the caller made them from [`GpuPoint`]) and
+/// the seconds of each step.
+pub(crate) struct GpuGather<T> {
     /// Per point, in the order given.
-    pub points: Vec<PointGather>,
+    pub points: Vec<T>,
     pub upload_seconds: f64,
     pub trace_seconds: f64,
     pub readback_seconds: f64,
 }
 
-/// What to gather: `gather`'s rays with random numbers of `seed`, distances clamped by
-/// `clamp`, the `ao` AOV's figures where `ao_radius` is given.
+/// What to gather: `rays` rays per point as `rounds` rounds of stratified `weighting`
+/// directions (`gather`'s, see [`crate::estimators::Gather`]) with random numbers of `seed`;
+/// hits closer than `d_min` count as `d_min`, and hits beyond `t_max` (finite) as escapes
+/// at `t_max`; the `ao` AOV's figures where `ao_radius` is given.
 #[derive(Clone, Copy)]
-pub(crate) struct GatherJob<'a> {
-    pub gather: &'a Gather,
+pub(crate) struct GatherJob {
+    pub rays: u32,
+    pub rounds: u32,
+    pub weighting: Weighting,
     pub seed: u64,
-    pub clamp: DistanceClamp,
+    pub d_min: f32,
+    pub t_max: f32,
     pub ao_radius: Option<f32>,
     pub split: Option<DispatchSplit>,
 }
 
-/// Gathers at `starts`, point `i`'s random numbers keyed by `key(i)`.
-pub(crate) fn gather_points(
+/// One point's figures as the GPU summed them.
+pub(crate) struct GpuPoint<'a> {
+    /// Σ 1/d of each round, in round order.
+    pub round_sums: &'a [f64],
+    /// Rays that escaped (or passed `t_max`).
+    pub escaped: u32,
+    /// The smallest hit distance.
+    pub dmin: f32,
+    /// The `ao` AOV's cosine-weighted open and total sums.
+    pub ao: (f64, f64),
+}
+
+/// Gathers at `starts`, point `i`'s random numbers keyed by `key(i)`; `point` makes each
+/// point's result from its sums.
+pub(crate) fn gather_points<T>(
     scene: &GpuScene,
     job: &GatherJob,
     starts: &[GatherStart],
     key: impl Fn(usize) -> u64,
     progress: &dyn Progress,
-) -> Result<GpuGather> {
-    let gather = job.gather;
-    let rays = gather.rays_per_point();
-    let rounds = gather.rounds();
+    point: impl Fn(GpuPoint) -> T,
+) -> Result<GpuGather<T>> {
+    let rays = job.rays;
+    let rounds = job.rounds;
     let per_round = rays / rounds;
     let (grid_a, grid_b) = strata(per_round);
     let base = Params {
@@ -109,11 +131,11 @@ pub(crate) fn gather_points(
         rounds,
         grid_a,
         grid_b,
-        weighting: (gather.weighting() == Weighting::Uniform) as u32,
+        weighting: (job.weighting == Weighting::Uniform) as u32,
         seed: [job.seed as u32, (job.seed >> 32) as u32],
-        d_min: job.clamp.min,
-        t_max: shader_t_max(job.clamp.max),
-        has_max: job.clamp.max.is_finite() as u32,
+        d_min: job.d_min,
+        t_max: shader_t_max(job.t_max),
+        has_max: job.t_max.is_finite() as u32,
         has_ao: job.ao_radius.is_some() as u32,
         ao_radius: job.ao_radius.unwrap_or(0.0),
         padding: 0,
@@ -242,83 +264,47 @@ pub(crate) fn gather_points(
         }
         // A Kahan sum is its value less its carry.
         let compensated = |[value, carry]: [f32; 2]| value as f64 - carry as f64;
+        let mut round_sums = Vec::with_capacity(rounds as usize);
         for (i, state) in states.iter().enumerate() {
-            let round_sums = &sums[i * rounds as usize..(i + 1) * rounds as usize];
-            out.points.push(PointGather::from_rounds(
-                gather.weighting(),
-                job.ao_radius,
-                round_sums.iter().map(|&s| compensated(s)),
-                per_round,
-                (state.escaped, state.dmin),
-                (compensated(state.ao_open), compensated(state.ao_total)),
-            ));
+            round_sums.clear();
+            round_sums.extend(
+                sums[i * rounds as usize..(i + 1) * rounds as usize]
+                    .iter()
+                    .map(|&s| compensated(s)),
+            );
+            out.points.push(point(GpuPoint {
+                round_sums: &round_sums,
+                escaped: state.escaped,
+                dmin: state.dmin,
+                ao: (compensated(state.ao_open), compensated(state.ao_total)),
+            }));
         }
     }
     progress.finish();
     Ok(out)
 }
 
-/// `gather` on the GPU over the whole image: H, the AOVs asked for, and what it took.
-pub(crate) fn estimate(
-    scene: &GpuScene,
-    gather: &Gather,
-    context: &EstimateContext,
-    gbuffer: &GBuffer,
-    ao: AoRadius,
-    progress: &dyn Progress,
-) -> Result<Estimate> {
-    let (pixels, starts): (Vec<usize>, Vec<GatherStart>) = gbuffer
-        .points
-        .iter()
-        .enumerate()
-        .filter_map(|(i, p)| p.as_ref().map(|hit| (i, GatherStart::at_hit(hit))))
-        .unzip();
-    let key = |i: usize| pixels[i] as u64;
-    let mut extra = 0.0;
-    let ao_radius = match ao {
-        AoRadius::None => None,
-        AoRadius::Given(r) => Some(r),
-        AoRadius::Median => {
-            // The default radius is the median of H: a first pass finds it.
-            let job = gather.gpu_job(context.seed, context.clamp, None);
-            let first = gather_points(scene, &job, &starts, key, progress)?;
-            extra = first.trace_seconds;
-            Some(median_finite(first.points.iter().map(|p| p.mean.value())))
-        }
-    };
-    let job = gather.gpu_job(context.seed, context.clamp, ao_radius);
-    let done = gather_points(scene, &job, &starts, key, progress)?;
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::{host_layout, wgsl_struct_layout};
 
-    let mut hmd = vec![f32::NAN; gbuffer.points.len()];
-    let mut samples = vec![AovSample::default(); if context.aovs.is_empty() { 0 } else { hmd.len() }];
-    let mut tally = Tally::default();
-    let mut scratch = AovSample::default();
-    for (&pixel, point) in pixels.iter().zip(&done.points) {
-        hmd[pixel] = point.mean.value();
-        let aov = samples.get_mut(pixel).unwrap_or(&mut scratch);
-        point.finish(&mut tally, aov);
+    /// `Params` and `State` are `GatherParams` and `State` of `gather.wgsl` member by member,
+    /// and a start is the shader's `Start`.
+    #[test]
+    fn the_host_structs_match_the_shaders() {
+        let source = [
+            super::super::scene::traverse_source(64),
+            include_str!("sampling.wgsl").into(),
+            include_str!("gather.wgsl").into(),
+        ]
+        .concat();
+        let params = host_layout!(Params: count, first_ray, end_ray, per_round, rounds, grid_a, grid_b,
+            weighting, seed, d_min, t_max, has_max, has_ao, ao_radius, padding);
+        assert_eq!(wgsl_struct_layout(&source, "GatherParams"), params);
+        let state = host_layout!(State: escaped, dmin, ao_open, ao_total, rays, padding);
+        assert_eq!(wgsl_struct_layout(&source, "State"), state);
+        let start = wgsl_struct_layout(&source, "Start");
+        assert_eq!(start.1 as usize, std::mem::size_of::<[[f32; 4]; 4]>());
     }
-    let aovs = AovImage::channels(context.aovs, &samples);
-    let trace_seconds = done.trace_seconds + extra;
-    Ok(Estimate {
-        hmd,
-        rays: Some(RayCount {
-            cast: tally.rays,
-            escaped: tally.escaped,
-            seconds: done.trace_seconds,
-        }),
-        phases: PhaseSeconds {
-            gpu_upload: Some(scene.upload_seconds + done.upload_seconds),
-            gpu_trace: Some(trace_seconds),
-            gpu_readback: Some(done.readback_seconds),
-            ..PhaseSeconds::default()
-        },
-        aovs,
-        details: Details {
-            ao_radius,
-            device: Some(DeviceDetails::gpu(scene.adapter())),
-            grays_per_s: Some(tally.rays as f64 / done.trace_seconds.max(1e-9) / 1e9),
-            ..Details::default()
-        },
-    })
 }

@@ -21,8 +21,8 @@ mod select;
 pub use scene::{DispatchSplit, GpuRay, GpuScene};
 pub use select::{select_adapter, AdapterListing, SELECT_GPU};
 
+use crate::backend::Backend;
 use crate::error::{DeviceErrorKind, Error, Result};
-use crate::estimators::Backend;
 
 /// The graphics APIs hmdist runs on. (Not GL: wgpu's GL fallback has neither R32Float render
 /// targets nor storage buffers everywhere.)
@@ -318,9 +318,81 @@ pub(crate) fn workgroups(invocations: u32, limit: u32) -> (u32, u32) {
     (x, groups.div_ceil(x))
 }
 
+/// `source` (WGSL) with the value of each `const NAME: u32 = …;` line of `constants` replaced:
+/// how the host puts its own layout constants into a shader. A constant the source lacks is a
+/// bug of hmdist's (tests build every shader this way), so it panics.
+pub(crate) fn inject_constants(source: &str, constants: &[(&str, String)]) -> String {
+    let mut lines: Vec<String> = source.lines().map(String::from).collect();
+    for (name, value) in constants {
+        let declaration = format!("const {name}: u32 = ");
+        let line = lines
+            .iter_mut()
+            .find(|l| l.starts_with(&declaration))
+            .unwrap_or_else(|| panic!("the shader declares no `{declaration}…;` to replace"));
+        *line = format!("{declaration}{value};");
+    }
+    lines.join("\n") + "\n"
+}
+
+/// The members (name, byte offset) and size of struct `name` in the WGSL `source`, as naga
+/// lays them out: what a `#[repr(C)]` twin on the host must match.
+#[cfg(test)]
+pub(crate) fn wgsl_struct_layout(source: &str, name: &str) -> (Vec<(String, u32)>, u32) {
+    let module =
+        naga::front::wgsl::parse_str(source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)));
+    let (_, ty) = module
+        .types
+        .iter()
+        .find(|(_, ty)| ty.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no struct {name} in the shader"));
+    let naga::TypeInner::Struct { members, span } = &ty.inner else {
+        panic!("{name} is not a struct");
+    };
+    let members = members
+        .iter()
+        .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+        .collect();
+    (members, *span)
+}
+
+/// The members (name, byte offset) and size of a host struct, for comparing with
+/// [`wgsl_struct_layout`].
+#[cfg(test)]
+macro_rules! host_layout {
+    ($t:ty: $($field:ident),* $(,)?) => {
+        (
+            vec![$((stringify!($field).to_string(), std::mem::offset_of!($t, $field) as u32)),*],
+            std::mem::size_of::<$t>() as u32,
+        )
+    };
+}
+#[cfg(test)]
+pub(crate) use host_layout;
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_traversal_takes_the_hosts_layout_constants() {
+        let source = scene::traverse_source(21);
+        for line in [
+            "const STACK_SIZE: u32 = 21u;",
+            "const NODE_VEC4S: u32 = 14u;",
+            "const WIDTH: u32 = 8u;",
+            "const LEAF: u32 = 0x80000000u;",
+            "const EMPTY: u32 = 0xffffffffu;",
+        ] {
+            assert!(source.lines().any(|l| l == line), "{line} missing");
+        }
+        naga::front::wgsl::parse_str(&source).unwrap();
+    }
+
+    #[test]
+    #[should_panic(expected = "declares no `const MISSING: u32 = …;`")]
+    fn a_constant_the_shader_lacks_is_caught() {
+        inject_constants("const THERE: u32 = 1u;", &[("MISSING", "2u".into())]);
+    }
 
     /// What `choose` did: opened with software allowed or not, or not at all, and its answer.
     fn chosen(

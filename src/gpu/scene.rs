@@ -8,8 +8,8 @@ use glam::Vec3;
 use super::Device;
 use crate::accel::wide::{WideBvh, EMPTY, LEAF, WIDTH};
 use crate::accel::Accel;
+pub use crate::backend::DispatchSplit;
 use crate::error::Result;
-pub use crate::estimators::gather::DispatchSplit;
 
 /// vec4s per wide node in `traverse.wgsl`'s layout: six rows of eight bounds, eight children.
 const NODE_VEC4S: usize = 14;
@@ -64,10 +64,7 @@ impl GpuScene {
         ];
         crate::gpu::check_buffers(&device, "the BVH", &buffers)?;
         let stack = (WIDTH - 1) * wide.depth + 1;
-        let traverse = include_str!("traverse.wgsl").replace(
-            "const STACK_SIZE: u32 = 64u;",
-            &format!("const STACK_SIZE: u32 = {stack}u;"),
-        );
+        let traverse = traverse_source(stack);
         let (gather, trace, bvh) = device.checked("uploading the scene to the GPU", || {
             let module = |label, parts: &[&str]| {
                 device.device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -211,6 +208,19 @@ impl GpuScene {
         self.device.queue.submit([encoder.finish()]);
         self.device.wait();
     }
+}
+
+/// `traverse.wgsl` with the host's layout constants in place of its defaults: the stack size
+/// for a BVH of `stack` entries' depth, and the node and block layout [`flatten`] writes.
+pub(crate) fn traverse_source(stack: usize) -> String {
+    let constants = [
+        ("STACK_SIZE", format!("{stack}u")),
+        ("NODE_VEC4S", format!("{NODE_VEC4S}u")),
+        ("WIDTH", format!("{WIDTH}u")),
+        ("LEAF", format!("{LEAF:#x}u")),
+        ("EMPTY", format!("{EMPTY:#x}u")),
+    ];
+    super::inject_constants(include_str!("traverse.wgsl"), &constants)
 }
 
 /// The BVH in `traverse.wgsl`'s layout: [`NODE_VEC4S`] vec4s per node, three vec4s per block

@@ -24,11 +24,15 @@
 // - The test for "coplanar with the triangle the ray leaves" runs in f32 with a looser
 //   tolerance than the CPU's f64 one.
 
+// The layout's constants: the host replaces each value with its own (src/gpu/scene.rs,
+// traverse_source), so the two cannot drift apart; the values here only let the file parse
+// alone. STACK_SIZE is (WIDTH - 1) * depth + 1 for the BVH at hand.
 const LEAF: u32 = 0x80000000u;
 const EMPTY: u32 = 0xffffffffu;
-const NONE: u32 = 0xffffffffu;
-// Replaced by the host with (WIDTH - 1) * depth + 1 for the BVH at hand.
+const WIDTH: u32 = 8u;
+const NODE_VEC4S: u32 = 14u;
 const STACK_SIZE: u32 = 64u;
+const NONE: u32 = 0xffffffffu;
 
 // The traversal stack: child references and their near distances (bit patterns). A caller
 // declares one per invocation and passes it to every closest_hit (WGSL zero-fills a function
@@ -226,7 +230,7 @@ fn closest_hit(origin: vec3<f32>, direction: vec3<f32>, t_max: f32, leaving: u32
         if (current & LEAF) == 0u {
             // Test the node's eight children; push the hit ones so that they pop nearest
             // first (ties in slot order), then take the nearest.
-            let base = 14u * current;
+            let base = NODE_VEC4S * current;
             var references = array<vec4<u32>, 2>(bitcast<vec4<u32>>(nodes[base + 12u]), bitcast<vec4<u32>>(nodes[base + 13u]));
             let first = top;
             for (var half = 0u; half < 2u; half++) {
@@ -267,7 +271,7 @@ fn closest_hit(origin: vec3<f32>, direction: vec3<f32>, t_max: f32, leaving: u32
             let block = (current & ~LEAF) >> 3u;
             let count = (current & 7u) + 1u;
             for (var k = 0u; k < count; k++) {
-                let lane = 8u * block + k;
+                let lane = WIDTH * block + k;
                 // Widened, so that a hit whose t equals the best one reaches the exact
                 // comparison (traverse.rs Search::leaf).
                 let hit = intersect(r, corner(lane, 0u).xyz, corner(lane, 1u).xyz, corner(lane, 2u).xyz, best.t * far_scale);

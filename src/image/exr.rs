@@ -9,7 +9,7 @@ use exr::prelude::*;
 use super::{write_atomically, HmdImage};
 use crate::error::{catch_file_panic, Error as HmdError, Result};
 use crate::estimators::AovImage;
-use crate::render::MAX_PIXELS;
+use crate::options::MAX_PIXELS;
 
 /// The channel name every hmdist EXR uses.
 pub const CHANNEL: &str = "Y";

@@ -185,8 +185,11 @@ pub fn hmd_at(
     if let Some(gpu) = query.gather.gpu(accel)? {
         let job = query.gather.gpu_job(query.seed, clamp, None);
         let key = |i: usize| keys.map_or(i as u64, |k| k[i]);
-        let done = crate::gpu::gather::gather_points(&gpu, &job, &starts, key, &crate::progress::Silent)?;
-        return Ok(done.points.iter().map(|p| p.mean.value()).collect());
+        let silent = &crate::progress::Silent;
+        let done = crate::gpu::gather::gather_points(&gpu, &job, &starts, key, silent, |p| {
+            query.gather.point_from_gpu(None, p).mean.value()
+        })?;
+        return Ok(done.points);
     }
     let hmd = starts
         .par_iter()

@@ -46,6 +46,12 @@ struct Params {
     padding: [u32; 2],
 }
 
+// The twins' sizes, checked as the crate compiles; the test at the end checks every member's
+// offset against the shader's.
+const _: () = assert!(std::mem::size_of::<Params>() == 80);
+const _: () = assert!(std::mem::size_of::<Cube>() == 64);
+const _: () = assert!(std::mem::size_of::<LookupResult>() == 16);
+
 /// Lookups per hemicube per dispatch on a software adapter: lavapipe stops a shader loop
 /// after 65,535 iterations per invocation, and a 65,536-direction loop ran into it.
 const SOFTWARE_MAX_LOOKUPS: u32 = 4096;
@@ -145,7 +151,7 @@ pub fn estimate(
             ..PhaseSeconds::default()
         },
         details: Details {
-            device: Some(DeviceDetails::gpu(&gpu.adapter_name)),
+            device: Some(DeviceDetails::gpu(&gpu.adapter_name, gpu.software)),
             cubemap: Some(CubemapDetails {
                 texels_rasterised: result.texels_rasterised,
                 texels_per_hemicube: cubemap.hemicube.texel_count() as u64,
@@ -626,5 +632,31 @@ impl Pipeline {
             raster_seconds: raster,
             lookup_seconds: start.elapsed().as_secs_f64(),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::{host_layout, wgsl_struct_layout};
+
+    /// `Params`, `Cube` and `LookupResult` are `Params`, `Cube` and `Lookup` of
+    /// `hemicube.wgsl`, member by member.
+    #[test]
+    fn the_host_structs_match_the_shaders() {
+        let source = [
+            include_str!("hemicube.wgsl"),
+            include_str!("../../gpu/sampling.wgsl"),
+        ]
+        .concat();
+        let params = host_layout!(Params: atlas_size, atlas_cols, resolution, count, rays, grid_a,
+            grid_b, weighting, has_max, seed, near, far, d_min, d_max, first_ray, end_ray, padding);
+        assert_eq!(wgsl_struct_layout(&source, "Params"), params);
+        assert_eq!(
+            wgsl_struct_layout(&source, "Cube"),
+            host_layout!(Cube: origin, t, b, n)
+        );
+        let lookup = host_layout!(LookupResult: sum, carry, escaped, looked);
+        assert_eq!(wgsl_struct_layout(&source, "Lookup"), lookup);
     }
 }

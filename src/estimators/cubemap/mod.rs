@@ -15,6 +15,7 @@ mod gpu;
 pub mod hemicube;
 
 use super::{EstimateContext, Estimator, GBuffer, Gather, Work};
+pub use crate::backend::Backend;
 use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::report::{CubemapParameters, Parameters};
@@ -25,44 +26,6 @@ pub use hemicube::{Face, Hemicube};
 pub const DEFAULT_CUBE_RES: u32 = 64;
 /// Largest `R` accepted: a 2R × 2R top face must fit a GPU texture comfortably.
 pub const MAX_CUBE_RES: u32 = 1024;
-
-/// Where an estimator runs: `gather`'s rays and the cube map's hemicubes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
-#[serde(rename_all = "lowercase")]
-pub enum Backend {
-    /// gpu if a hardware adapter exists, else cpu (a software implementation such as Mesa's
-    /// lavapipe is slower than the CPU backend). A hardware GPU that fails is an error, not a
-    /// quiet CPU render.
-    #[default]
-    Auto,
-    /// A hardware GPU through wgpu (Vulkan, Metal or DX12): gather's rays in a compute shader,
-    /// the cube map by rasterisation. A software implementation (Mesa's lavapipe, about 0.2 M
-    /// rays/s) is refused, naming it, unless `HMDIST_GPU_SOFTWARE=1`.
-    Gpu,
-    /// As `gpu`, a software implementation included (what CI and the tests use).
-    #[serde(rename = "gpu-software")]
-    GpuSoftware,
-    /// The CPU: gather's rays by the SIMD kernels, the cube map by casting a ray through each
-    /// texel looked up.
-    Cpu,
-}
-
-impl Backend {
-    /// Whether this backend runs on a GPU whenever it runs at all (`gpu`, `gpu-software`).
-    pub fn is_gpu(self) -> bool {
-        matches!(self, Backend::Gpu | Backend::GpuSoftware)
-    }
-
-    /// The error of asking for a GPU from an hmdist built without the `gpu` feature.
-    #[cfg(not(feature = "gpu"))]
-    pub(crate) fn unavailable() -> crate::error::Error {
-        crate::error::Error::device(
-            crate::error::DeviceErrorKind::NoAdapter,
-            "this hmdist was built without the gpu feature: use the cpu backend",
-        )
-    }
-}
 
 /// The cube-map estimator: `gather`'s directions looked up in per-pixel hemicubes.
 pub struct Cubemap {

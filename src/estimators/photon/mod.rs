@@ -20,8 +20,9 @@ use super::{
 use crate::accel::Hit;
 use crate::accel::{Accel, BuildQuality};
 use crate::error::{Error, Result};
+use crate::options::{in_pool, RenderOptions};
 use crate::progress::Progress;
-use crate::render::RenderOptions;
+pub use crate::report::SourceKind;
 use crate::report::{Details, Parameters, PhaseSeconds, PhotonDetails, PhotonParameters};
 use crate::scene::Scene;
 pub use map::{GatherScratch, MapHeader, PhotonMap, PhotonMethod};
@@ -37,30 +38,6 @@ pub const DEFAULT_MAX_BOUNCES: u32 = 20;
 pub const DEFAULT_ABSORPTION: f32 = 0.2;
 /// A gathered photon counts when `n_j · n` is at least this (same surface orientation).
 pub const NORMAL_FILTER_COS: f32 = 0.9;
-
-/// Where photon paths start.
-#[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
-)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
-#[serde(rename_all = "lowercase")]
-pub enum SourceKind {
-    /// The scene's spot light.
-    #[default]
-    Light,
-    /// The camera, through random image positions.
-    Camera,
-}
-
-impl SourceKind {
-    /// The name the CLI and the report use.
-    pub fn name(self) -> &'static str {
-        match self {
-            SourceKind::Light => "light",
-            SourceKind::Camera => "camera",
-        }
-    }
-}
 
 /// The photon estimators' parameters.
 #[derive(Clone, Copy, Debug)]
@@ -182,13 +159,11 @@ impl PhotonEstimator {
     ) -> Result<Vec<u8>> {
         options.validate()?;
         scene.validate()?;
-        crate::render::in_pool(options.threads, || {
+        in_pool(options.threads, || {
             let pixels = options.width as u64 * options.height as u64;
-            let bvh = options
-                .bvh_quality
-                .resolve(pixels + self.expected_rays(pixels), scene.mesh.triangle_count());
-            crate::memory::check_bvh(scene.mesh.triangle_count())?;
-            let accel = Accel::build(&scene.mesh, bvh).with_kernel(crate::accel::Kernel::from_env()?);
+            let rays = pixels + self.expected_rays(pixels);
+            let kernel = crate::accel::Kernel::from_env()?;
+            let (accel, bvh) = Accel::for_work(&scene.mesh, options.bvh_quality, rays, kernel)?;
             let source = self.source_for(scene, (options.width, options.height))?;
             let (map, header, _) = self.trace_and_index(&accel, &source, options.seed, progress)?;
             let fingerprint = self.map_fingerprint(scene, options.seed, (options.width, options.height), bvh);

@@ -1,0 +1,282 @@
+//! The source's layering (docs/ARCHITECTURE.md), checked over the files in `src/`: no two
+//! files import each other, directly or through others, and no layer imports one above it.
+//!
+//! An import is a `crate::`, `super::` or `self::` path outside comments, resolved to the
+//! longest module path that is a file; a module's paths into its own descendants (its `mod`
+//! declarations and re-exports) are not counted. The same rule as the workplace's
+//! `rscycles.py`, so the two agree.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+type Module = Vec<String>;
+
+/// What each layer may not import (by module path prefix): the GPU backend sits below the
+/// estimators, the estimators below the render driver, the driver below shards, experiments
+/// and the program.
+#[rustfmt::skip]
+const FORBIDDEN: &[(&str, &[&str])] = &[
+    ("accel", &["estimators", "render", "shard", "experiments", "gpu", "points", "cli"]),
+    ("scene", &["estimators", "render", "shard", "experiments", "gpu", "points", "cli"]),
+    ("gpu", &["estimators", "render", "shard", "experiments", "points", "cli"]),
+    ("estimators", &["render", "shard", "experiments", "points", "cli"]),
+    ("report", &["estimators", "render", "shard", "experiments", "cli"]),
+    ("options", &["render", "shard", "experiments", "cli"]),
+    ("render", &["shard", "experiments", "cli"]),
+];
+
+/// Every `.rs` file under `src/` by its module path (`lib.rs` is the root, `main.rs` is
+/// `<main>`, `a/mod.rs` is `a`).
+fn modules(src: &Path) -> BTreeMap<Module, PathBuf> {
+    let mut files = BTreeMap::new();
+    let mut dirs = vec![src.to_path_buf()];
+    while let Some(dir) = dirs.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                dirs.push(path);
+                continue;
+            }
+            if path.extension().is_none_or(|e| e != "rs") {
+                continue;
+            }
+            let relative = path.strip_prefix(src).unwrap().with_extension("");
+            let mut module: Module = relative
+                .iter()
+                .map(|p| p.to_string_lossy().into_owned())
+                .collect();
+            match module.iter().map(String::as_str).collect::<Vec<_>>()[..] {
+                ["lib"] => module.clear(),
+                ["main"] => module = vec!["<main>".into()],
+                [.., "mod"] => {
+                    module.pop();
+                }
+                _ => {}
+            }
+            files.insert(module, path);
+        }
+    }
+    files
+}
+
+/// `text` without its `//` comments (doc comments included).
+fn without_comments(text: &str) -> String {
+    text.lines()
+        .map(|line| line.split_once("//").map_or(line, |(code, _)| code))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// `a::{b, c::{d, e}}` as `a::b`, `a::c::d`, `a::c::e`.
+fn expand(path: &str) -> Vec<String> {
+    let Some(open) = path.find("::{") else {
+        return vec![path.to_string()];
+    };
+    let (head, body) = (&path[..open], &path[open + 3..path.len() - 1]);
+    let mut items = vec![];
+    let (mut depth, mut item) = (0, String::new());
+    for c in body.chars() {
+        match c {
+            '{' => depth += 1,
+            '}' => depth -= 1,
+            ',' if depth == 0 => {
+                items.push(std::mem::take(&mut item));
+                continue;
+            }
+            _ => {}
+        }
+        item.push(c);
+    }
+    items.push(item);
+    items
+        .iter()
+        .map(|i| i.trim())
+        .filter(|i| !i.is_empty())
+        .flat_map(|i| expand(&format!("{head}::{i}")))
+        .collect()
+}
+
+/// The `crate::`, `super::` and `self::` paths in `text`, braces expanded.
+fn paths(text: &str) -> Vec<String> {
+    let text = without_comments(text);
+    let bytes = text.as_bytes();
+    let mut out = vec![];
+    for start in (0..bytes.len()).filter(|&i| text.is_char_boundary(i)) {
+        let word = ["crate::", "super::", "self::"]
+            .into_iter()
+            .find(|w| text[start..].starts_with(w));
+        let boundary = start == 0 || !(bytes[start - 1].is_ascii_alphanumeric() || bytes[start - 1] == b'_');
+        let (Some(_), true) = (word, boundary) else {
+            continue;
+        };
+        let (mut depth, mut end) = (0, start);
+        for (i, c) in text[start..].char_indices() {
+            match c {
+                '{' => depth += 1,
+                '}' if depth == 0 => break,
+                '}' => depth -= 1,
+                c if depth == 0 && !(c.is_alphanumeric() || c == '_' || c == ':') => break,
+                _ => {}
+            }
+            end = start + i + c.len_utf8();
+        }
+        let path: String = text[start..end].chars().filter(|c| !c.is_whitespace()).collect();
+        out.extend(expand(path.trim_end_matches(':')));
+    }
+    out
+}
+
+/// The module file `path`, used in `module`, names; `None` outside the crate's files.
+fn resolve(module: &Module, path: &str, files: &BTreeMap<Module, PathBuf>) -> Option<Module> {
+    let parts: Vec<&str> = path.split("::").collect();
+    let (mut base, mut rest) = if parts[0] == "crate" {
+        (vec![], &parts[1..])
+    } else {
+        (module.clone(), &parts[..])
+    };
+    while let Some(first) = rest.first().filter(|p| **p == "super" || **p == "self") {
+        if *first == "super" {
+            base.pop();
+        }
+        rest = &rest[1..];
+    }
+    (0..=rest.len()).rev().find_map(|k| {
+        let mut candidate = base.clone();
+        candidate.extend(rest[..k].iter().map(|s| s.to_string()));
+        files.contains_key(&candidate).then_some(candidate)
+    })
+}
+
+/// Each module file's imports of other module files.
+fn graph(files: &BTreeMap<Module, PathBuf>) -> BTreeMap<Module, BTreeSet<Module>> {
+    files
+        .iter()
+        .map(|(module, path)| {
+            let text = std::fs::read_to_string(path).unwrap();
+            let targets = paths(&text)
+                .iter()
+                .filter_map(|p| resolve(module, p, files))
+                .filter(|t| t != module)
+                // A module's own descendants (its `mod`s and re-exports) do not count.
+                .filter(|t| module.first().is_some_and(|m| m == "<main>") || !t.starts_with(module))
+                .collect();
+            (module.clone(), targets)
+        })
+        .collect()
+}
+
+fn reachable(edges: &BTreeMap<Module, BTreeSet<Module>>, from: &Module) -> BTreeSet<Module> {
+    let mut seen = BTreeSet::new();
+    let mut stack = vec![from.clone()];
+    while let Some(m) = stack.pop() {
+        for next in &edges[&m] {
+            if seen.insert(next.clone()) {
+                stack.push(next.clone());
+            }
+        }
+    }
+    seen
+}
+
+/// The file of `module`, relative to the crate's root.
+fn name(files: &BTreeMap<Module, PathBuf>, module: &Module) -> String {
+    let path = &files[module];
+    path.strip_prefix(env!("CARGO_MANIFEST_DIR"))
+        .unwrap_or(path)
+        .display()
+        .to_string()
+}
+
+fn src() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("src")
+}
+
+/// The groups of files that import each other, each as a sorted list of paths.
+fn cycles(
+    files: &BTreeMap<Module, PathBuf>,
+    edges: &BTreeMap<Module, BTreeSet<Module>>,
+) -> BTreeSet<Vec<String>> {
+    let reach: BTreeMap<&Module, BTreeSet<Module>> = files.keys().map(|m| (m, reachable(edges, m))).collect();
+    files
+        .keys()
+        .filter(|m| reach[m].contains(*m))
+        .map(|m| {
+            let mut group: Vec<String> = files
+                .keys()
+                .filter(|other| reach[m].contains(*other) && reach[other].contains(m))
+                .map(|other| name(files, other))
+                .collect();
+            group.sort();
+            group
+        })
+        .collect()
+}
+
+#[test]
+fn no_file_imports_itself_through_others() {
+    let files = modules(&src());
+    let edges = graph(&files);
+    let cycles = cycles(&files, &edges);
+    let listed: Vec<String> = cycles.iter().map(|c| c.join(", ")).collect();
+    assert!(
+        cycles.is_empty(),
+        "files that import each other:\n{}",
+        listed.join("\n")
+    );
+}
+
+#[test]
+fn no_layer_imports_one_above_it() {
+    let files = modules(&src());
+    let edges = graph(&files);
+    let mut wrong = vec![];
+    for (module, targets) in &edges {
+        let Some((layer, above)) = FORBIDDEN
+            .iter()
+            .find(|(l, _)| module.first().is_some_and(|m| m == l))
+        else {
+            continue;
+        };
+        for target in targets {
+            if target.first().is_some_and(|t| above.contains(&t.as_str())) {
+                wrong.push(format!(
+                    "{} ({layer}) imports {}",
+                    name(&files, module),
+                    name(&files, target)
+                ));
+            }
+        }
+    }
+    assert!(
+        wrong.is_empty(),
+        "imports against the layering:\n{}",
+        wrong.join("\n")
+    );
+}
+
+/// The checks see what they must: a made-up pair of files that import each other is a
+/// cycle, brace groups and `super::` resolve, and comments are not imports.
+#[test]
+fn the_checks_find_a_cycle_when_there_is_one() {
+    let dir = std::env::temp_dir().join(format!("hmdist-layering-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(dir.join("a")).unwrap();
+    std::fs::write(dir.join("lib.rs"), "mod a;\nmod b;\n// use crate::c::X;\n").unwrap();
+    std::fs::write(dir.join("a/mod.rs"), "mod inner;\n").unwrap();
+    std::fs::write(dir.join("a/inner.rs"), "use super::super::{b::Y, c};\n").unwrap();
+    std::fs::write(dir.join("b.rs"), "fn f() { crate::a::inner::g() }\n").unwrap();
+    std::fs::write(dir.join("c.rs"), "/// crate::b\n").unwrap();
+    let files = modules(&dir);
+    let edges = graph(&files);
+    let cycles = cycles(&files, &edges);
+    std::fs::remove_dir_all(&dir).unwrap();
+    let expected: Vec<String> = ["a/inner.rs", "b.rs"]
+        .iter()
+        .map(|f| dir.join(f).display().to_string())
+        .collect();
+    assert_eq!(cycles.into_iter().collect::<Vec<_>>(), vec![expected]);
+    let c = vec!["c".to_string()];
+    assert!(edges[&vec![]].is_empty(), "a comment counted as an import");
+    assert!(edges[&c].is_empty(), "a doc comment counted as an import");
+    assert!(edges[&vec!["a".to_string(), "inner".to_string()]].contains(&c));
+}
