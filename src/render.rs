@@ -133,7 +133,6 @@ fn render_in_pool(
     };
     let setup = start.elapsed().as_secs_f64();
     let estimates = pass(&context, &gbuffer)?;
-    let camera = &scene.camera;
     let outputs = estimators
         .iter()
         .zip(estimates)
@@ -152,21 +151,9 @@ fn render_in_pool(
                 triangles: scene.mesh.triangle_count(),
                 l_diag,
                 d_min: context.clamp.min,
-                bounds: BoundsReport {
-                    min: bounds.min.to_array(),
-                    max: bounds.max.to_array(),
-                },
-                camera: CameraReport {
-                    eye: camera.eye.to_array(),
-                    target: camera.target.to_array(),
-                    up: camera.up.to_array(),
-                    fov_y_deg: camera.fov_y_deg,
-                },
-                light: scene.light.map(|l| LightReport {
-                    position: l.position.to_array(),
-                    direction: l.direction.to_array(),
-                    cone_half_angle_deg: l.cone_half_angle_deg,
-                }),
+                bounds: BoundsReport::from(&bounds),
+                camera: CameraReport::from(&scene.camera),
+                light: scene.light.as_ref().map(LightReport::from),
                 display_scale: scene.display_scale,
                 background_pixels: background,
                 rays_cast: estimate.rays.map(|r| r.cast),

@@ -6,6 +6,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::sampling::Weighting;
+use crate::scene::{Bounds, Camera, SpotLight};
 
 /// One rendered image's report: the JSON sidecar.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
@@ -249,6 +250,36 @@ pub struct LightReport {
     pub direction: [f32; 3],
     /// Half the cone's opening angle, degrees.
     pub cone_half_angle_deg: f32,
+}
+
+impl From<&Bounds> for BoundsReport {
+    fn from(bounds: &Bounds) -> Self {
+        BoundsReport {
+            min: bounds.min.to_array(),
+            max: bounds.max.to_array(),
+        }
+    }
+}
+
+impl From<&Camera> for CameraReport {
+    fn from(camera: &Camera) -> Self {
+        CameraReport {
+            eye: camera.eye.to_array(),
+            target: camera.target.to_array(),
+            up: camera.up.to_array(),
+            fov_y_deg: camera.fov_y_deg,
+        }
+    }
+}
+
+impl From<&SpotLight> for LightReport {
+    fn from(light: &SpotLight) -> Self {
+        LightReport {
+            position: light.position.to_array(),
+            direction: light.direction.to_array(),
+            cone_half_angle_deg: light.cone_half_angle_deg,
+        }
+    }
 }
 
 /// Seconds per phase: the driver's, then the estimator's own (absent where it has none).

@@ -34,14 +34,12 @@ fn try_rendered(
 ) -> Result<Rendered, Error> {
     let estimator = registry::build(method, &config.for_aovs(aovs))?;
     let options = RenderOptions {
-        width: size,
-        height: size,
         seed,
         threads,
         aovs: aovs.to_vec(),
         ..RenderOptions::default()
     };
-    render(scene, estimator.as_ref(), &options, &Silent)
+    common::render_square(scene, estimator.as_ref(), size, options)
 }
 
 fn channel(r: &Rendered, aov: Aov) -> &[f32] {

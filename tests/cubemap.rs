@@ -19,12 +19,7 @@ use hmdist::scene::{Camera, Mesh, Scene};
 
 fn try_cubemap(scene: &Scene, size: u32, rays: u32, resolution: u32, backend: Backend) -> Result<Rendered> {
     let estimator = Cubemap::new(Gather::new(rays, Weighting::Cosine).unwrap(), resolution, backend).unwrap();
-    let options = RenderOptions {
-        width: size,
-        height: size,
-        ..RenderOptions::default()
-    };
-    render(scene, &estimator as &dyn Estimator, &options, &Silent)
+    common::render_square(scene, &estimator, size, RenderOptions::default())
 }
 
 fn cubemap(

@@ -14,21 +14,18 @@ use hmdist::estimators::{Aov, Backend, Gather};
 use hmdist::gpu::{GpuRay, GpuScene};
 use hmdist::metrics::f_diff;
 use hmdist::points::{hmd_at, PointQuery, SurfacePoint};
-use hmdist::progress::Silent;
-use hmdist::render::{primary_hits, render, RenderOptions, Rendered};
+use hmdist::render::{primary_hits, RenderOptions, Rendered};
 use hmdist::sampling::Weighting;
 use hmdist::scene::procedural::validation;
 use hmdist::scene::Scene;
 
 fn render_with(scene: &Scene, gather: Gather, size: u32, aovs: Vec<Aov>) -> Result<Rendered> {
     let options = RenderOptions {
-        width: size,
-        height: size,
         aovs,
         bvh_quality: BuildQuality::Fast,
         ..RenderOptions::default()
     };
-    render(scene, &gather, &options, &Silent)
+    common::render_square(scene, &gather, size, options)
 }
 
 fn gpu_gather(rays: u32) -> Gather {

@@ -290,12 +290,7 @@ fn estimate_on_gpu(
     use crate::gpu::gather::gather_points;
     use crate::report::PhaseSeconds;
 
-    let (pixels, starts): (Vec<usize>, Vec<GatherStart>) = gbuffer
-        .points
-        .iter()
-        .enumerate()
-        .filter_map(|(i, p)| p.as_ref().map(|hit| (i, GatherStart::at_hit(hit))))
-        .unzip();
+    let (pixels, starts) = gbuffer.starts();
     let key = |i: usize| pixels[i] as u64;
     let mut extra = 0.0;
     let ao_radius = match ao {

@@ -58,6 +58,17 @@ impl GBuffer {
     pub fn surface_pixels(&self) -> u64 {
         (self.points.len() - self.background_pixels()) as u64
     }
+
+    /// The surface pixels' indices and the starts of their gather rays (or hemicubes), in
+    /// pixel order: what the GPU backends take.
+    #[cfg(feature = "gpu")]
+    pub(crate) fn starts(&self) -> (Vec<usize>, Vec<crate::accel::GatherStart>) {
+        self.points
+            .iter()
+            .enumerate()
+            .filter_map(|(i, p)| p.as_ref().map(|hit| (i, crate::accel::GatherStart::at_hit(hit))))
+            .unzip()
+    }
 }
 
 /// What every estimator may use besides the G-buffer.

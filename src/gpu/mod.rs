@@ -1,6 +1,8 @@
-//! Ray casting on the GPU: the scene's wide BVH traversed by a wgpu compute shader
-//! (`traverse.wgsl`), for `gather --backend gpu` and H at points; and the adapter choice that
-//! the cube map's rasteriser shares.
+//! Everything hmdist does on a GPU, in one place: the adapter choice ([`open_for`], `select.rs`)
+//! and the device; ray casting, the scene's wide BVH traversed by a wgpu compute shader
+//! (`traverse.wgsl`, `scene.rs`), for `gather --backend gpu` and H at points (`gather.rs`,
+//! `gather.wgsl`); and the cube map's hemicubes, rasterised and looked up (`hemicube.rs`,
+//! `hemicube.wgsl`). It knows nothing of the estimators, which turn its sums into images.
 //!
 //! A software traversal, not hardware ray queries: wgpu's ray queries need
 //! `VK_KHR_ray_query`, which datacenter GPUs without RT cores (the H100) and Debian 12's
@@ -15,6 +17,7 @@
 //! vertices in a fixed order (see `traverse.wgsl`): no ray escapes a closed room.
 
 pub(crate) mod gather;
+pub(crate) mod hemicube;
 mod scene;
 mod select;
 

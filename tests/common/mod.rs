@@ -8,13 +8,29 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use hmdist::error::{DeviceErrorKind, Error, Result};
-use hmdist::estimators::Gather;
+use hmdist::estimators::{Estimator, Gather};
 use hmdist::image::HmdImage;
 use hmdist::progress::Silent;
 use hmdist::render::{render, RenderOptions, Rendered};
 use hmdist::report::RenderReport;
 use hmdist::sampling::Weighting;
 use hmdist::scene::{Camera, Mesh, Scene};
+
+/// Renders `scene` with `estimator` at `size × size`, the other options as in `options`: the
+/// one render helper of the tests.
+pub fn render_square(
+    scene: &Scene,
+    estimator: &dyn Estimator,
+    size: u32,
+    options: RenderOptions,
+) -> Result<Rendered> {
+    let options = RenderOptions {
+        width: size,
+        height: size,
+        ..options
+    };
+    render(scene, estimator, &options, &Silent)
+}
 
 /// Renders `scene` with `rays` cosine- or uniform-weighted gather rays at `width × height`.
 pub fn gather(

@@ -10,13 +10,13 @@
 //! hardware GPU where there is one, else the CPU.
 
 mod cpu;
-#[cfg(feature = "gpu")]
-mod gpu;
 pub mod hemicube;
 
 use super::{EstimateContext, Estimator, GBuffer, Gather, Work};
 pub use crate::backend::Backend;
 use crate::error::{Error, Result};
+#[cfg(feature = "gpu")]
+use crate::gpu::hemicube::HemicubeGpu;
 use crate::progress::Progress;
 use crate::report::{CubemapParameters, Parameters};
 pub use cpu::sweep;
@@ -76,8 +76,8 @@ impl Cubemap {
 
     /// The GPU to rasterise with, or `None` for the CPU backend.
     #[cfg(feature = "gpu")]
-    fn gpu(&self) -> Result<Option<gpu::Gpu>> {
-        crate::gpu::open_for(self.backend, gpu::Gpu::open)
+    fn gpu(&self) -> Result<Option<HemicubeGpu>> {
+        crate::gpu::open_for(self.backend, HemicubeGpu::open)
     }
 }
 
@@ -113,7 +113,7 @@ impl Estimator for Cubemap {
     ) -> Result<Work<'a>> {
         #[cfg(feature = "gpu")]
         if let Some(gpu) = self.gpu()? {
-            return gpu::estimate(&gpu, self, context, gbuffer, progress).map(|e| Work::Done(Box::new(e)));
+            return estimate_on_gpu(&gpu, self, context, gbuffer, progress).map(|e| Work::Done(Box::new(e)));
         }
         #[cfg(not(feature = "gpu"))]
         if self.backend.is_gpu() {
@@ -129,4 +129,57 @@ impl Estimator for Cubemap {
             rays: None,
         })
     }
+}
+
+/// The cube map on the GPU over the whole image ([`crate::gpu::hemicube`]): H per pixel and
+/// what it took. Rasterisation casts no rays, so the report's `rays_cast`, `escaped_rays` and
+/// `mrays_per_s` are null.
+#[cfg(feature = "gpu")]
+fn estimate_on_gpu(
+    gpu: &HemicubeGpu,
+    cubemap: &Cubemap,
+    context: &EstimateContext,
+    gbuffer: &GBuffer,
+    progress: &dyn Progress,
+) -> Result<super::Estimate> {
+    use crate::gpu::hemicube::{look_up, HemicubeJob};
+    use crate::report::{CubemapDetails, Details, DeviceDetails, PhaseSeconds};
+
+    let (pixels, starts) = gbuffer.starts();
+    let rays = cubemap.gather.rays_per_point();
+    let job = HemicubeJob {
+        mesh: &context.scene.mesh,
+        resolution: cubemap.hemicube.resolution,
+        rays,
+        weighting: cubemap.gather.weighting(),
+        seed: context.seed,
+        d_min: context.clamp.min,
+        t_max: context.clamp.max,
+        far: 4.0 * context.scene.diagonal() + 1.0,
+    };
+    let done = look_up(gpu, &job, &starts, |i| pixels[i] as u32, progress)?;
+    let mut hmd = vec![f32::NAN; gbuffer.points.len()];
+    for (&pixel, h) in pixels.iter().zip(done.hmd) {
+        hmd[pixel] = h;
+    }
+    Ok(super::Estimate {
+        hmd,
+        rays: None,
+        aovs: vec![],
+        phases: PhaseSeconds {
+            cubemap_build: Some(done.raster_seconds),
+            cubemap_lookup: Some(done.lookup_seconds),
+            ..PhaseSeconds::default()
+        },
+        details: Details {
+            device: Some(DeviceDetails::gpu(&gpu.adapter_name, gpu.software)),
+            cubemap: Some(CubemapDetails {
+                texels_rasterised: pixels.len() as u64 * cubemap.hemicube.texel_count() as u64,
+                texels_per_hemicube: cubemap.hemicube.texel_count() as u64,
+                lookups: pixels.len() as u64 * rays as u64,
+                escaped_lookups: done.escaped_lookups,
+            }),
+            ..Details::default()
+        },
+    })
 }

@@ -1,6 +1,7 @@
-//! The GPU backend of the cube-map estimator: wgpu rasterises the five faces of many pixels'
-//! hemicubes per submission into one R32Float atlas, and a compute pass does the lookups, so
-//! only H per pixel comes back (SPEC §3.2).
+//! Hemicubes on the GPU, for the cube-map estimator's GPU backend: wgpu rasterises the five
+//! faces of many points' hemicubes per submission into one R32Float atlas, and a compute pass
+//! does the lookups, so only H per point comes back (SPEC §3.2). The estimator
+//! ([`crate::estimators::Cubemap`]) turns that into its image and report.
 //!
 //! Batching: each hemicube is a `2R × 6R` block of the atlas (top face `2R × 2R`, then the four
 //! side faces `2R × R`); one instanced draw renders the scene once per (hemicube, face), the
@@ -13,12 +14,11 @@ use std::time::Instant;
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
-use super::Cubemap;
+use crate::accel::GatherStart;
 use crate::error::{DeviceErrorKind, Error, Result};
-use crate::estimators::{Estimate, EstimateContext, GBuffer};
 use crate::progress::Progress;
-use crate::report::{CubemapDetails, Details, DeviceDetails, PhaseSeconds};
-use crate::sampling::{strata, Frame, Weighting};
+use crate::sampling::{strata, Weighting};
+use crate::scene::Mesh;
 
 /// Largest atlas side we ask for (the device limit may be lower).
 const MAX_ATLAS: u32 = 4096;
@@ -85,41 +85,56 @@ struct Batch {
     lookup_seconds: f64,
 }
 
-/// What the GPU backend measured over the whole image.
-struct GpuEstimate {
-    hmd: Vec<f32>,
-    texels_rasterised: u64,
-    /// Lookups (pixel, direction) whose texel holds no surface within `--max-distance`.
-    escaped_lookups: u64,
-    raster_seconds: f64,
-    lookup_seconds: f64,
+/// What to rasterise and look up: `mesh`'s hemicubes of per-quadrant resolution
+/// `resolution`, looked up in `rays` stratified `weighting` directions (gather's, with random
+/// numbers of `seed`); depths from `d_min` (the near plane) to `far`, distances clamped below
+/// at `d_min`, and beyond `t_max` (where finite) counted as escaped lookups.
+pub(crate) struct HemicubeJob<'a> {
+    pub mesh: &'a Mesh,
+    pub resolution: u32,
+    pub rays: u32,
+    pub weighting: Weighting,
+    pub seed: u64,
+    pub d_min: f32,
+    pub t_max: f32,
+    pub far: f32,
+}
+
+/// H at each point, `rays / Σ 1/d` over its lookups (`+inf` where none saw a surface), and
+/// what it took.
+pub(crate) struct HemicubeLookups {
+    pub hmd: Vec<f32>,
+    /// Lookups whose texel holds no surface (within `t_max`).
+    pub escaped_lookups: u64,
+    pub raster_seconds: f64,
+    pub lookup_seconds: f64,
 }
 
 /// A device that can run the hemicube pipeline, and what it is called.
-pub struct Gpu {
+pub(crate) struct HemicubeGpu {
     device: wgpu::Device,
     queue: wgpu::Queue,
-    pub adapter_name: String,
+    pub(crate) adapter_name: String,
     max_texture: u32,
     /// The device's limits, for the buffer checks.
     limits: wgpu::Limits,
     /// A software implementation (lavapipe): lookups are split into short dispatches.
-    software: bool,
+    pub(crate) software: bool,
 }
 
-impl Gpu {
+impl HemicubeGpu {
     /// The first Vulkan, Metal or DX12 adapter with clip distances, if any (see
     /// [`crate::gpu`]). A software rasteriser (Mesa's lavapipe) is taken only when
     /// `allow_software`.
-    pub fn open(allow_software: bool) -> Result<Gpu> {
-        let crate::gpu::Device {
+    pub fn open(allow_software: bool) -> Result<HemicubeGpu> {
+        let super::Device {
             device,
             queue,
             adapter_name,
             limits,
             software: device_software,
-        } = crate::gpu::Device::open("hmdist hemicubes", allow_software, wgpu::Features::CLIP_DISTANCES)?;
-        Ok(Gpu {
+        } = super::Device::open("hmdist hemicubes", allow_software, wgpu::Features::CLIP_DISTANCES)?;
+        Ok(HemicubeGpu {
             device,
             queue,
             adapter_name,
@@ -130,48 +145,16 @@ impl Gpu {
     }
 }
 
-/// The whole image: H per pixel and what it took. Rasterisation casts no rays, so the
-/// report's `rays_cast`, `escaped_rays` and `mrays_per_s` are null.
-pub fn estimate(
-    gpu: &Gpu,
-    cubemap: &Cubemap,
-    context: &EstimateContext,
-    gbuffer: &GBuffer,
+/// H at `starts` (their keys, the random numbers' and the shader's, from `key`), with what it
+/// took: see [`HemicubeLookups`].
+pub(crate) fn look_up(
+    gpu: &HemicubeGpu,
+    job: &HemicubeJob,
+    starts: &[GatherStart],
+    key: impl Fn(usize) -> u32,
     progress: &dyn Progress,
-) -> Result<Estimate> {
-    let result = rasterise(gpu, cubemap, context, gbuffer, progress)?;
-    let lookups = gbuffer.surface_pixels() * cubemap.gather.rays_per_point() as u64;
-    Ok(Estimate {
-        hmd: result.hmd,
-        rays: None,
-        aovs: vec![],
-        phases: PhaseSeconds {
-            cubemap_build: Some(result.raster_seconds),
-            cubemap_lookup: Some(result.lookup_seconds),
-            ..PhaseSeconds::default()
-        },
-        details: Details {
-            device: Some(DeviceDetails::gpu(&gpu.adapter_name, gpu.software)),
-            cubemap: Some(CubemapDetails {
-                texels_rasterised: result.texels_rasterised,
-                texels_per_hemicube: cubemap.hemicube.texel_count() as u64,
-                lookups,
-                escaped_lookups: result.escaped_lookups,
-            }),
-            ..Details::default()
-        },
-    })
-}
-
-/// H per pixel, with what it took: see [`GpuEstimate`].
-fn rasterise(
-    gpu: &Gpu,
-    cubemap: &Cubemap,
-    context: &EstimateContext,
-    gbuffer: &GBuffer,
-    progress: &dyn Progress,
-) -> Result<GpuEstimate> {
-    let r = cubemap.hemicube.resolution;
+) -> Result<HemicubeLookups> {
+    let r = job.resolution;
     let side = MAX_ATLAS.min(gpu.max_texture);
     let (cols, rows) = (side / (2 * r), side / (6 * r));
     if cols == 0 || rows == 0 {
@@ -180,13 +163,13 @@ fn rasterise(
     }
     let capacity = (cols * rows) as usize;
     let atlas_size = (cols * 2 * r, rows * 6 * r);
-    let mesh = &context.scene.mesh;
+    let mesh = job.mesh;
     let what = "the cube map";
     let storage = [
         ("cubes", capacity * std::mem::size_of::<Cube>()),
         ("results", capacity * std::mem::size_of::<LookupResult>()),
     ];
-    crate::gpu::check_buffers_within(&gpu.limits, &gpu.adapter_name, what, &storage)?;
+    super::check_buffers_within(&gpu.limits, &gpu.adapter_name, what, &storage)?;
     // Vertex and index buffers are not storage bindings: only the buffer size limit applies.
     let unbound = wgpu::Limits {
         max_storage_buffer_binding_size: gpu.limits.max_buffer_size,
@@ -196,72 +179,56 @@ fn rasterise(
         ("vertices", mesh.positions.len() * 12),
         ("indices", mesh.indices.len() * 12),
     ];
-    crate::gpu::check_buffers_within(&unbound, &gpu.adapter_name, what, &geometry)?;
+    super::check_buffers_within(&unbound, &gpu.adapter_name, what, &geometry)?;
     // Catch the device's errors here rather than let wgpu panic on them.
-    crate::gpu::checked(&gpu.device, "the cube-map pipeline", || {
-        estimate_batches(
-            gpu,
-            cubemap,
-            context,
-            gbuffer,
-            progress,
-            atlas_size,
-            (cols, capacity),
-        )
+    super::checked(&gpu.device, "the cube-map pipeline", || {
+        look_up_in_batches(gpu, job, starts, key, progress, atlas_size, (cols, capacity))
     })
 }
 
-fn estimate_batches(
-    gpu: &Gpu,
-    cubemap: &Cubemap,
-    context: &EstimateContext,
-    gbuffer: &GBuffer,
+fn look_up_in_batches(
+    gpu: &HemicubeGpu,
+    job: &HemicubeJob,
+    starts: &[GatherStart],
+    key: impl Fn(usize) -> u32,
     progress: &dyn Progress,
     atlas_size: (u32, u32),
     (cols, capacity): (u32, usize),
-) -> Result<GpuEstimate> {
-    let r = cubemap.hemicube.resolution;
-    let pipeline = Pipeline::new(gpu, context, atlas_size);
+) -> Result<HemicubeLookups> {
+    let r = job.resolution;
+    let pipeline = Pipeline::new(gpu, job.mesh, atlas_size);
 
-    let pixels: Vec<(usize, Cube)> = gbuffer
-        .points
+    let cubes: Vec<Cube> = starts
         .iter()
         .enumerate()
-        .filter_map(|(i, p)| {
-            p.map(|hit| {
-                let frame = Frame::from_normal(hit.normal);
-                let o = hit.spawn_origin(hit.normal);
-                let v = |v: glam::Vec3, w: f32| [v.x, v.y, v.z, w];
-                (
-                    i,
-                    Cube {
-                        origin: v(o, 0.0),
-                        t: v(frame.t, 0.0),
-                        b: v(frame.b, 0.0),
-                        n: v(frame.n, f32::from_bits(i as u32)),
-                    },
-                )
-            })
+        .map(|(i, start)| {
+            let (o, frame) = (start.origin, start.frame);
+            let v = |v: glam::Vec3, w: f32| [v.x, v.y, v.z, w];
+            Cube {
+                origin: v(o, 0.0),
+                t: v(frame.t, 0.0),
+                b: v(frame.b, 0.0),
+                n: v(frame.n, f32::from_bits(key(i))),
+            }
         })
         .collect();
 
-    let (a, b) = strata(cubemap.gather.rays_per_point());
-    let clamp = context.clamp;
+    let (a, b) = strata(job.rays);
     let base = Params {
         atlas_size: [atlas_size.0 as f32, atlas_size.1 as f32],
         atlas_cols: cols,
         resolution: r,
         count: 0,
-        rays: cubemap.gather.rays_per_point(),
+        rays: job.rays,
         grid_a: a,
         grid_b: b,
-        weighting: (cubemap.gather.weighting() == Weighting::Uniform) as u32,
-        has_max: clamp.max.is_finite() as u32,
-        seed: [context.seed as u32, (context.seed >> 32) as u32],
-        near: clamp.min,
-        far: 4.0 * context.scene.diagonal() + 1.0,
-        d_min: clamp.min,
-        d_max: if clamp.max.is_finite() { clamp.max } else { 0.0 },
+        weighting: (job.weighting == Weighting::Uniform) as u32,
+        has_max: job.t_max.is_finite() as u32,
+        seed: [job.seed as u32, (job.seed >> 32) as u32],
+        near: job.d_min,
+        far: job.far,
+        d_min: job.d_min,
+        d_max: if job.t_max.is_finite() { job.t_max } else { 0.0 },
         first_ray: 0,
         end_ray: 0,
         padding: [0; 2],
@@ -269,42 +236,41 @@ fn estimate_batches(
     let rays = base.rays;
     let per_dispatch = if gpu.software { SOFTWARE_MAX_LOOKUPS } else { rays };
 
-    let mut hmd = vec![f32::NAN; gbuffer.points.len()];
+    let mut hmd = Vec::with_capacity(cubes.len());
     let (mut raster, mut lookup, mut escaped) = (0.0, 0.0, 0);
-    progress.start("cube maps", pixels.len() as u64);
-    for batch in pixels.chunks(capacity) {
+    progress.start("cube maps", cubes.len() as u64);
+    for (b, batch) in cubes.chunks(capacity).enumerate() {
         crate::interrupt::check()?;
-        let cubes: Vec<Cube> = batch.iter().map(|(_, c)| *c).collect();
         let params = Params {
             count: batch.len() as u32,
             ..base
         };
-        let done = pipeline.run(gpu, &params, &cubes, per_dispatch)?;
+        let done = pipeline.run(gpu, &params, batch, per_dispatch)?;
         raster += done.raster_seconds;
         lookup += done.lookup_seconds;
-        for ((i, _), result) in batch.iter().zip(done.values) {
+        for (j, result) in done.values.iter().enumerate() {
             if result.looked != rays {
                 let message = format!(
-                    "the GPU made {} of pixel {i}'s {rays} cube-map lookups: a shader loop was cut \
+                    "the GPU made {} of point {}'s {rays} cube-map lookups: a shader loop was cut \
                      short (a driver's cap on loop iterations?), so the result was thrown away",
-                    result.looked
+                    result.looked,
+                    b * capacity + j
                 );
                 return Err(Error::device(DeviceErrorKind::Failed, message));
             }
             // As the shader did before the lookups were split: H = N / Σ 1/d.
-            hmd[*i] = if result.sum > 0.0 {
+            hmd.push(if result.sum > 0.0 {
                 rays as f32 / result.sum
             } else {
                 f32::INFINITY
-            };
+            });
             escaped += result.escaped as u64;
         }
         progress.advance(batch.len() as u64);
     }
     progress.finish();
-    Ok(GpuEstimate {
+    Ok(HemicubeLookups {
         hmd,
-        texels_rasterised: pixels.len() as u64 * cubemap.hemicube.texel_count() as u64,
         escaped_lookups: escaped,
         raster_seconds: raster,
         lookup_seconds: lookup,
@@ -325,20 +291,16 @@ struct Pipeline {
 }
 
 impl Pipeline {
-    fn new(gpu: &Gpu, context: &EstimateContext, atlas_size: (u32, u32)) -> Pipeline {
+    fn new(gpu: &HemicubeGpu, mesh: &Mesh, atlas_size: (u32, u32)) -> Pipeline {
         let device = &gpu.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("hemicube.wgsl"),
             source: wgpu::ShaderSource::Wgsl(
-                [
-                    include_str!("hemicube.wgsl"),
-                    include_str!("../../gpu/sampling.wgsl"),
-                ]
-                .concat()
-                .into(),
+                [include_str!("hemicube.wgsl"), include_str!("sampling.wgsl")]
+                    .concat()
+                    .into(),
             ),
         });
-        let mesh = &context.scene.mesh;
         let positions: Vec<[f32; 3]> = mesh.positions.iter().map(|p| p.to_array()).collect();
         let indices: Vec<u32> = mesh.indices.iter().flatten().copied().collect();
         let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -483,7 +445,7 @@ impl Pipeline {
     /// half.
     /// Rasterises `cubes`' hemicubes, then looks their directions up in dispatches of at most
     /// `per_dispatch` directions each (the sums carried between them).
-    fn run(&self, gpu: &Gpu, params: &Params, cubes: &[Cube], per_dispatch: u32) -> Result<Batch> {
+    fn run(&self, gpu: &HemicubeGpu, params: &Params, cubes: &[Cube], per_dispatch: u32) -> Result<Batch> {
         let device = &gpu.device;
         let init = |label, contents: &[u8], usage| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -644,11 +606,7 @@ mod tests {
     /// `hemicube.wgsl`, member by member.
     #[test]
     fn the_host_structs_match_the_shaders() {
-        let source = [
-            include_str!("hemicube.wgsl"),
-            include_str!("../../gpu/sampling.wgsl"),
-        ]
-        .concat();
+        let source = [include_str!("hemicube.wgsl"), include_str!("sampling.wgsl")].concat();
         let params = host_layout!(Params: atlas_size, atlas_cols, resolution, count, rays, grid_a,
             grid_b, weighting, has_max, seed, near, far, d_min, d_max, first_ray, end_ray, padding);
         assert_eq!(wgsl_struct_layout(&source, "Params"), params);

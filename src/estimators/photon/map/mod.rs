@@ -25,7 +25,13 @@
 
 use std::num::NonZero;
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
+
+mod file;
+mod octahedral;
+
+pub use file::MapHeader;
+pub use octahedral::{decode_octahedral, encode_octahedral};
 
 use super::trace::TracedPhoton;
 use crate::error::{Error, Result};
@@ -374,165 +380,6 @@ impl PhotonMap {
     }
 }
 
-/// What a photon map file says besides the map: which render it belongs to and what tracing
-/// it cost.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct MapHeader {
-    /// Hash of the scene, the photon parameters, the seed (and the image size, for
-    /// camera-sourced photons) and hmdist's version.
-    pub fingerprint: u64,
-    /// Photons stored.
-    pub photons_stored: u64,
-    /// Paths traced to store them.
-    pub paths_traced: u64,
-    /// Stored photons whose continuation escaped.
-    pub escaped_photons: u64,
-    /// Rays the tracing cast.
-    pub rays_cast: u64,
-    /// Of those, rays that met nothing.
-    pub escaped_rays: u64,
-}
-
-/// The first bytes of a photon map file, with its format's version.
-const MAGIC: &[u8; 8] = b"HMDPMAP1";
-
-impl PhotonMap {
-    /// The map as a file: `MAGIC` (`HMDPMAP1`), the header, then the tree and every column,
-    /// little-endian.
-    pub fn to_bytes(&self, header: &MapHeader) -> Vec<u8> {
-        let mut out = MAGIC.to_vec();
-        let method = match self.payloads {
-            Payloads::StoredDistance { .. } => 1u64,
-            Payloads::NextHitPoint { .. } => 2,
-        };
-        for v in [
-            header.fingerprint,
-            header.photons_stored,
-            header.paths_traced,
-            header.escaped_photons,
-            header.rays_cast,
-            header.escaped_rays,
-            method,
-            self.depth as u64,
-            self.len() as u64,
-        ] {
-            out.extend(v.to_le_bytes());
-        }
-        let floats = |out: &mut Vec<u8>, v: &[f32]| out.extend(v.iter().flat_map(|f| f.to_le_bytes()));
-        floats(&mut out, &self.planes);
-        out.extend(&self.axes);
-        for column in [&self.x, &self.y, &self.z] {
-            floats(&mut out, column);
-        }
-        out.extend(self.normals.iter().flatten().flat_map(|n| n.to_le_bytes()));
-        match &self.payloads {
-            Payloads::StoredDistance { distance } => floats(&mut out, distance),
-            Payloads::NextHitPoint { qx, qy, qz } => {
-                for column in [qx, qy, qz] {
-                    floats(&mut out, column);
-                }
-            }
-        }
-        out
-    }
-
-    /// A map from the bytes of [`PhotonMap::to_bytes`], checked: magic, version, method and
-    /// every length; the message says what is wrong.
-    pub fn from_bytes(
-        bytes: &[u8],
-        method: PhotonMethod,
-    ) -> std::result::Result<(PhotonMap, MapHeader), String> {
-        let mut r = Reader { bytes, at: 0 };
-        if r.take(8)? != MAGIC {
-            return Err("is not an hmdist photon map (version 1)".into());
-        }
-        let mut words = [0u64; 9];
-        for w in &mut words {
-            *w = u64::from_le_bytes(r.take(8)?.try_into().expect("8 bytes"));
-        }
-        let [fingerprint, photons_stored, paths_traced, escaped_photons, rays_cast, escaped_rays, kind, depth, n] =
-            words;
-        let expected = match method {
-            PhotonMethod::StoredDistance => 1,
-            PhotonMethod::NextHitPoint => 2,
-        };
-        if kind != expected {
-            return Err(format!("is a map for photon{kind}, not {}", method.name()));
-        }
-        let leaves = usize::try_from(n).unwrap_or(usize::MAX).div_ceil(LEAF).max(1);
-        if n > u32::MAX as u64 || depth != leaves.next_power_of_two().trailing_zeros() as u64 {
-            return Err("has an inconsistent tree".into());
-        }
-        let (n, internal) = (n as usize, (1usize << depth) - 1);
-        let planes = r.floats(internal)?;
-        let axes = r.take(internal)?.to_vec();
-        if axes.iter().any(|&a| a > 2) {
-            return Err("has an inconsistent tree".into());
-        }
-        let (x, y, z) = (r.floats(n)?, r.floats(n)?, r.floats(n)?);
-        let normals = r
-            .take(4 * n)?
-            .chunks_exact(4)
-            .map(|c| [u16::from_le_bytes([c[0], c[1]]), u16::from_le_bytes([c[2], c[3]])])
-            .collect();
-        let payloads = match method {
-            PhotonMethod::StoredDistance => Payloads::StoredDistance {
-                distance: r.floats(n)?,
-            },
-            PhotonMethod::NextHitPoint => Payloads::NextHitPoint {
-                qx: r.floats(n)?,
-                qy: r.floats(n)?,
-                qz: r.floats(n)?,
-            },
-        };
-        if r.at != bytes.len() {
-            return Err("has bytes after its end".into());
-        }
-        let header = MapHeader {
-            fingerprint,
-            photons_stored,
-            paths_traced,
-            escaped_photons,
-            rays_cast,
-            escaped_rays,
-        };
-        let map = PhotonMap {
-            planes,
-            axes,
-            depth: depth as u32,
-            x,
-            y,
-            z,
-            normals,
-            payloads,
-        };
-        Ok((map, header))
-    }
-}
-
-/// Reads a photon map file front to back.
-struct Reader<'a> {
-    bytes: &'a [u8],
-    at: usize,
-}
-
-impl<'a> Reader<'a> {
-    fn take(&mut self, n: usize) -> std::result::Result<&'a [u8], String> {
-        let end = self.at.checked_add(n).ok_or("is truncated")?;
-        let part = self.bytes.get(self.at..end).ok_or("is truncated")?;
-        self.at = end;
-        Ok(part)
-    }
-
-    fn floats(&mut self, n: usize) -> std::result::Result<Vec<f32>, String> {
-        let bytes = self.take(n.checked_mul(4).ok_or("is truncated")?)?;
-        Ok(bytes
-            .chunks_exact(4)
-            .map(|c| f32::from_le_bytes(c.try_into().expect("4 bytes")))
-            .collect())
-    }
-}
-
 /// One worker's gather buffers and its previous query.
 #[derive(Default)]
 pub struct GatherScratch {
@@ -620,49 +467,10 @@ fn entries_worth_splitting(len: usize) -> bool {
     len >= 1 << 14
 }
 
-/// A unit vector as two 16-bit octahedral coordinates (Cigolle et al. 2014).
-pub fn encode_octahedral(v: Vec3) -> [u16; 2] {
-    let p = Vec2::new(v.x, v.y) / (v.x.abs() + v.y.abs() + v.z.abs());
-    let p = if v.z < 0.0 {
-        (Vec2::ONE - Vec2::new(p.y, p.x).abs()) * Vec2::new(p.x.signum(), p.y.signum())
-    } else {
-        p
-    };
-    let q = |c: f32| ((c.clamp(-1.0, 1.0) * 0.5 + 0.5) * 65535.0).round() as u16;
-    [q(p.x), q(p.y)]
-}
-
-/// The unit vector of [`encode_octahedral`].
-pub fn decode_octahedral(e: [u16; 2]) -> Vec3 {
-    let p = Vec2::new(e[0] as f32, e[1] as f32) / 65535.0 * 2.0 - Vec2::ONE;
-    let z = 1.0 - p.x.abs() - p.y.abs();
-    let t = (-z).max(0.0);
-    let x = p.x - t.copysign(p.x);
-    let y = p.y - t.copysign(p.y);
-    Vec3::new(x, y, z).normalize()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::sampling::random_pair;
-
-    #[test]
-    fn octahedral_normals_round_trip_within_a_hundredth_of_a_degree() {
-        for i in 0..100_000 {
-            let u = random_pair(3, 0, i);
-            let z = 2.0 * u.x - 1.0;
-            let r = (1.0 - z * z).sqrt();
-            let v = Vec3::new(r * (6.2831855 * u.y).cos(), r * (6.2831855 * u.y).sin(), z);
-            let back = decode_octahedral(encode_octahedral(v));
-            // The angle from |v × back| (a cosine this close to 1 rounds to 1 in f32).
-            let angle = v.cross(back).length().asin().to_degrees();
-            assert!(angle < 0.01 && back.dot(v) > 0.0, "{v} -> {back}: {angle}°");
-        }
-        for v in [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z] {
-            assert!(decode_octahedral(encode_octahedral(v)).dot(v) > 0.99999);
-        }
-    }
 
     #[test]
     fn bytes_per_photon_is_what_the_map_holds() {
