@@ -177,7 +177,7 @@ fn render_in_pool(
                     ShardReport {
                         index: s.index,
                         count: s.count,
-                        fingerprint: key.fingerprint(),
+                        fingerprint: fingerprint(scene, *estimator, options),
                         key: Some(key),
                     }
                 }),
@@ -192,6 +192,29 @@ fn render_in_pool(
             }
         });
     Ok(outputs.collect())
+}
+
+/// The fingerprint shard reports have carried since shards began: a hash of the scene (name
+/// and content), the method and its parameters, size, seed, distance clamp, AOVs and version.
+/// It holds fewer fields than the [`RenderKey`] and keeps its first form, so that `merge` can
+/// still join a part written before keys existed (which it compares by fingerprint) with
+/// parts written after: an experiment's image rendered in parts over several sessions may
+/// have both.
+fn fingerprint(scene: &Scene, estimator: &dyn Estimator, options: &RenderOptions) -> String {
+    let parameters = serde_json::to_string(&estimator.parameters()).expect("parameters serialise");
+    let key = format!(
+        "{}|{}|{:016x}|{}|{parameters}|{}x{}|{}|{:?}|{:?}",
+        env!("CARGO_PKG_VERSION"),
+        scene.name,
+        scene.fingerprint(),
+        estimator.method(),
+        options.width,
+        options.height,
+        options.seed,
+        options.max_distance.map(f32::to_bits),
+        options.aovs,
+    );
+    format!("{:016x}", crate::scene::stable_hash(key.as_bytes()))
 }
 
 /// The key of `scene` rendered by `estimator` with `options` through BVH preset `bvh`

@@ -126,7 +126,8 @@ pub struct ShardReport {
     pub index: u32,
     /// How many shards.
     pub count: u32,
-    /// Hash of everything that determines the pixels: of [`ShardReport::key`].
+    /// Hash of the scene, method, parameters, size, seed, clamp, AOVs and version: the
+    /// key's older, smaller form, which `merge` compares where a part has no key.
     pub fingerprint: String,
     /// Everything that determines the pixels; absent from reports written before it was
     /// added (`merge` then compares fingerprints alone).
@@ -175,12 +176,6 @@ pub struct RenderKey {
 }
 
 impl RenderKey {
-    /// A short hash of the key, the same on every machine.
-    pub fn fingerprint(&self) -> String {
-        let json = serde_json::to_string(self).expect("a key serialises");
-        format!("{:016x}", crate::scene::stable_hash(json.as_bytes()))
-    }
-
     /// The fields whose values differ from `other`'s, each as `name (this value against
     /// other's)`, in alphabetical order; empty where the keys are equal.
     pub fn differences(&self, other: &RenderKey) -> Vec<String> {

@@ -6,7 +6,7 @@
 //! so a shard's pixels equal the one-machine render's. A shard's report carries the render's
 //! key ([`crate::report::RenderKey`]: the scene's content, camera and light, the method and
 //! its parameters, the backend and adapter class it ran on, the BVH preset, size, seed,
-//! distance clamp, AOVs with the `ao` radius, and hmdist's version) and its fingerprint;
+//! distance clamp, AOVs with the `ao` radius, and hmdist's version) and the older fingerprint;
 //! [`merge`] refuses parts whose keys differ (naming the fields), a missing or repeated
 //! shard, and writes the merged report's sums of rays, escapes and seconds with each shard's
 //! timings.
@@ -198,7 +198,8 @@ fn not_one_render(a: &ShardReport, b: &ShardReport) -> Option<String> {
         (Some(ka), Some(kb)) => ka.differences(kb),
         _ if a.fingerprint == b.fingerprint => vec![],
         _ => vec![format!(
-            "fingerprint ({} against {}: scene, camera, method, parameters, backend, size, seed or version)",
+            "fingerprint ({} against {}: scene, camera, method, parameters, size, seed, clamp, AOVs or \
+             version)",
             a.fingerprint, b.fingerprint
         )],
     };

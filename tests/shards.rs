@@ -276,6 +276,70 @@ fn merge_refuses_parts_of_another_ao_radius_or_backend_and_names_the_field() {
     );
 }
 
+/// A part whose report predates keys (as one an experiment rendered in an earlier session)
+/// still merges with parts that have keys where its fingerprint agrees, and not where not.
+#[test]
+fn a_part_without_a_key_is_compared_by_fingerprint() {
+    let dir = Scratch::new("shards-keyless");
+    whole_and_shards(&dir, &["--size", "16x9", "--rays", "4", "--backend", "cpu"]);
+    let args = [
+        "render",
+        "--quiet",
+        "--size",
+        "16x9",
+        "--rays",
+        "4",
+        "--backend",
+        "cpu",
+        "--seed",
+        "9",
+        "--shard",
+        "3/4",
+        "--out",
+        "seed9.exr",
+    ];
+    hmdist_ok(dir.path(), &args);
+    let without_key = |name: &str| {
+        let path = dir.join(name);
+        let mut json = common::cli::read_json(&path);
+        json["shard"]
+            .as_object_mut()
+            .unwrap()
+            .remove("key")
+            .expect("a key to remove");
+        std::fs::write(&path, serde_json::to_string_pretty(&json).unwrap()).unwrap();
+    };
+    without_key("part3.json");
+    without_key("seed9.json");
+    hmdist_ok(
+        dir.path(),
+        &[
+            "merge",
+            "--quiet",
+            "merged.exr",
+            "part0.exr",
+            "part1.exr",
+            "part2.exr",
+            "part3.exr",
+        ],
+    );
+    assert!(bytes(&dir, "merged.exr") == bytes(&dir, "one.exr"));
+    let refused = hmdist(
+        dir.path(),
+        &[
+            "merge",
+            "out.exr",
+            "part0.exr",
+            "part1.exr",
+            "part2.exr",
+            "seed9.exr",
+        ],
+    );
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("differ in fingerprint"), "{stderr}");
+}
+
 #[test]
 fn a_photon_map_built_once_gives_every_shard_the_one_machine_pixels() {
     let dir = Scratch::new("shards-photon-map");
