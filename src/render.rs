@@ -133,6 +133,8 @@ fn render_in_pool(
     };
     let setup = start.elapsed().as_secs_f64();
     let estimates = pass(&context, &gbuffer)?;
+    // The scene's content hash, for the shard reports: hashed once, not per output.
+    let scene_content = shard.map(|_| scene.fingerprint());
     let outputs = estimators
         .iter()
         .zip(estimates)
@@ -172,14 +174,18 @@ fn render_in_pool(
                     .chain(options.aovs.iter().map(|a| a.name()))
                     .map(String::from)
                     .collect(),
-                shard: shard.map(|s| {
-                    let key = render_key(scene, *estimator, options, bvh, &estimate.details);
-                    ShardReport {
-                        index: s.index,
-                        count: s.count,
-                        fingerprint: fingerprint(scene, *estimator, options),
-                        key: Some(key),
-                    }
+                shard: shard.zip(scene_content).map(|(s, content)| ShardReport {
+                    index: s.index,
+                    count: s.count,
+                    fingerprint: fingerprint(scene, content, *estimator, options),
+                    key: Some(render_key(
+                        scene,
+                        content,
+                        *estimator,
+                        options,
+                        bvh,
+                        &estimate.details,
+                    )),
                 }),
                 shards: None,
                 parameters: estimator.parameters(),
@@ -200,13 +206,19 @@ fn render_in_pool(
 /// still join a part written before keys existed (which it compares by fingerprint) with
 /// parts written after: an experiment's image rendered in parts over several sessions may
 /// have both.
-fn fingerprint(scene: &Scene, estimator: &dyn Estimator, options: &RenderOptions) -> String {
+/// `scene_content` is [`Scene::fingerprint`].
+fn fingerprint(
+    scene: &Scene,
+    scene_content: u64,
+    estimator: &dyn Estimator,
+    options: &RenderOptions,
+) -> String {
     let parameters = serde_json::to_string(&estimator.parameters()).expect("parameters serialise");
     let key = format!(
         "{}|{}|{:016x}|{}|{parameters}|{}x{}|{}|{:?}|{:?}",
         env!("CARGO_PKG_VERSION"),
         scene.name,
-        scene.fingerprint(),
+        scene_content,
         estimator.method(),
         options.width,
         options.height,
@@ -218,9 +230,11 @@ fn fingerprint(scene: &Scene, estimator: &dyn Estimator, options: &RenderOptions
 }
 
 /// The key of `scene` rendered by `estimator` with `options` through BVH preset `bvh`
-/// (resolved), whose estimate reported `details` (where it ran, the `ao` radius).
-pub fn render_key(
+/// (resolved), whose estimate reported `details` (where it ran, the `ao` radius);
+/// `scene_content` is [`Scene::fingerprint`].
+fn render_key(
     scene: &Scene,
+    scene_content: u64,
     estimator: &dyn Estimator,
     options: &RenderOptions,
     bvh: BuildQuality,
@@ -230,7 +244,7 @@ pub fn render_key(
     RenderKey {
         hmdist_version: env!("CARGO_PKG_VERSION").into(),
         scene: scene.name.clone(),
-        scene_content: format!("{:016x}", scene.fingerprint()),
+        scene_content: format!("{scene_content:016x}"),
         method: estimator.method().into(),
         parameters: estimator.parameters(),
         backend: device.map_or("cpu".into(), |d| d.backend.clone()),

@@ -139,7 +139,7 @@ pub struct ShardReport {
 /// timings, a shard's own rows): two renders with equal keys give the same pixels bit for bit.
 /// A shard carries its key, and `hmdist merge` joins only parts whose keys are equal, naming
 /// the fields that differ ([`RenderKey::differences`]); the render driver makes it
-/// ([`crate::render::render_key`]).
+/// (`render_key` in `render.rs`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RenderKey {
     /// The hmdist that rendered it.

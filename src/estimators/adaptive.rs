@@ -8,10 +8,11 @@
 //! thread count. Random numbers are `gather`'s: with the same rounds, a pixel that stops at N
 //! rays has the H of `gather --rays N --rounds N/(min_rays/8)`.
 
-use super::gather::{GatherStart, PointGather};
+use super::gather::PointGather;
 use super::{
     Aov, AovSample, EstimateContext, Estimator, GBuffer, PixelPass, PixelWork, PixelWorker, Tally, Work,
 };
+use crate::accel::GatherStart;
 use crate::accel::Hit;
 use crate::error::{Error, Result};
 use crate::progress::Progress;

@@ -20,8 +20,7 @@ use super::{
     Aov, AovSample, DistanceClamp, EstimateContext, Estimator, GBuffer, HarmonicMean, PixelPass, PixelWork,
     PixelWorker, Tally, Work,
 };
-pub(crate) use crate::accel::GatherStart;
-use crate::accel::{Hit, RayCaster, PACKET};
+use crate::accel::{GatherStart, Hit, RayCaster, PACKET};
 use crate::backend::Backend;
 pub use crate::backend::DispatchSplit;
 use crate::error::{Error, Result};

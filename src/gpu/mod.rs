@@ -21,7 +21,8 @@ pub(crate) mod hemicube;
 mod scene;
 mod select;
 
-pub use scene::{DispatchSplit, GpuRay, GpuScene};
+pub use crate::backend::DispatchSplit;
+pub use scene::{GpuRay, GpuScene};
 pub use select::{select_adapter, AdapterListing, SELECT_GPU};
 
 use crate::backend::Backend;

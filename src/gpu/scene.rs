@@ -8,7 +8,6 @@ use glam::Vec3;
 use super::Device;
 use crate::accel::wide::{WideBvh, EMPTY, LEAF, WIDTH};
 use crate::accel::Accel;
-pub use crate::backend::DispatchSplit;
 use crate::error::Result;
 
 /// vec4s per wide node in `traverse.wgsl`'s layout: six rows of eight bounds, eight children.

@@ -21,9 +21,9 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::accel::float_error::gamma;
+use crate::accel::GatherStart;
 use crate::accel::{Accel, Hit};
 use crate::error::{Error, Result};
-use crate::estimators::gather::GatherStart;
 use crate::estimators::{DistanceClamp, Gather};
 use crate::scene::Scene;
 
