@@ -5,7 +5,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::accel::BuildQuality;
+use crate::accel::{BuildQuality, Kernel};
 use crate::error::{Error, Result};
 
 /// One AOV: a per-pixel companion of H, written as an EXR channel beside `Y` (SPEC §8;
@@ -73,6 +73,10 @@ pub struct RenderOptions {
     pub max_distance: Option<f32>,
     /// The BVH preset.
     pub bvh_quality: BuildQuality,
+    /// The ray-casting kernel (default [`Kernel::best`]; every kernel gives the same bits).
+    /// The library never reads `HMDIST_KERNEL`: the CLI and Python read it, with
+    /// [`Kernel::from_env`], and set this.
+    pub kernel: Kernel,
     /// AOVs to measure beside H, each an EXR channel (SPEC §8).
     pub aovs: Vec<Aov>,
     /// Render only this shard's rows ([`crate::shard`]); `None` for the whole image.
@@ -88,6 +92,7 @@ impl Default for RenderOptions {
             threads: None,
             max_distance: None,
             bvh_quality: BuildQuality::default(),
+            kernel: Kernel::best(),
             aovs: vec![],
             shard: None,
         }

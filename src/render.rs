@@ -12,7 +12,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use crate::accel::Hit;
-use crate::accel::{Accel, BuildQuality, Kernel, RayCaster};
+use crate::accel::{Accel, BuildQuality, RayCaster};
 use crate::error::{Error, Result};
 pub use crate::estimators::pass::estimate;
 use crate::estimators::{AovImage, AovSample, DistanceClamp, Estimate, EstimateContext, Estimator, GBuffer};
@@ -93,7 +93,7 @@ fn render_in_pool(
     options: &RenderOptions,
     pass: impl FnOnce(&EstimateContext, &GBuffer) -> Result<Vec<(Estimate, f64)>>,
 ) -> Result<Vec<Rendered>> {
-    let kernel = Kernel::from_env()?;
+    let kernel = options.kernel;
     let pixels = options.width as u64 * options.height as u64;
     let expected = estimators
         .iter()

@@ -345,6 +345,25 @@ pub struct Parameters {
     /// `adaptive`.
     #[serde(flatten)]
     pub adaptive: Option<AdaptiveParameters>,
+    /// Any other method's parameters, by name, beside the groups above: what
+    /// [`Parameters::of`] fills in for an estimator that has no group of its own.
+    #[serde(flatten)]
+    pub other: std::collections::BTreeMap<String, serde_json::Value>,
+}
+
+impl Parameters {
+    /// `params` (a method's parameter struct), every field under its own name: the report's
+    /// parameters of an estimator with no group of its own here.
+    pub fn of(params: &impl Serialize) -> Parameters {
+        let other = match serde_json::to_value(params) {
+            Ok(serde_json::Value::Object(map)) => map.into_iter().collect(),
+            _ => Default::default(),
+        };
+        Parameters {
+            other,
+            ..Parameters::default()
+        }
+    }
 }
 
 /// When adaptive gathering stops.

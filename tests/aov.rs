@@ -4,7 +4,7 @@
 mod common;
 
 use hmdist::error::Error;
-use hmdist::estimators::{registry, Aov, AovImage, MethodConfig};
+use hmdist::estimators::{registry, AdaptiveParams, Aov, AovImage, GatherParams, PhotonParams};
 use hmdist::progress::Silent;
 use hmdist::render::{render, RenderOptions, Rendered};
 use hmdist::sampling::Weighting;
@@ -15,7 +15,7 @@ use hmdist::scene::Scene;
 fn rendered(
     scene: &Scene,
     method: &str,
-    config: MethodConfig,
+    config: impl serde::Serialize,
     size: u32,
     aovs: &[Aov],
     seed: u64,
@@ -26,13 +26,13 @@ fn rendered(
 fn try_rendered(
     scene: &Scene,
     method: &str,
-    config: MethodConfig,
+    config: impl serde::Serialize,
     size: u32,
     aovs: &[Aov],
     seed: u64,
     threads: Option<usize>,
 ) -> Result<Rendered, Error> {
-    let estimator = registry::build(method, &config.for_aovs(aovs))?;
+    let estimator = registry::build(method, &config, aovs)?;
     let options = RenderOptions {
         seed,
         threads,
@@ -54,10 +54,10 @@ fn channel(r: &Rendered, aov: Aov) -> &[f32] {
 fn inside_a_sphere_h_lies_between_dmin_and_the_diameter_nothing_escapes_and_ao_is_zero_or_one() {
     let r = validation::SPHERE_RADIUS;
     let scene = validation::sphere(r, 6);
-    let config = |ao_radius| MethodConfig {
+    let config = |ao_radius| GatherParams {
         rays: 64,
         ao_radius: Some(ao_radius),
-        ..MethodConfig::default()
+        ..GatherParams::default()
     };
     let all = [Aov::Dmin, Aov::Escaped, Aov::Ao, Aov::Rays];
     // AO radius beyond the diameter: every ray meets the sphere within it.
@@ -91,11 +91,11 @@ fn ao_on_the_slab_floor_is_h_over_r_squared() {
     let scene = validation::slab(h, 1000.0);
     for weighting in [Weighting::Cosine, Weighting::Uniform] {
         for radius in [0.9 * h, 1.5 * h, 2.0 * h, 4.0 * h] {
-            let config = MethodConfig {
+            let config = GatherParams {
                 rays: 65_536,
                 weighting,
                 ao_radius: Some(radius),
-                ..MethodConfig::default()
+                ..GatherParams::default()
             };
             let image = rendered(&scene, "gather", config, 1, &[Aov::Ao], 1);
             let ao = channel(&image, Aov::Ao)[0];
@@ -115,10 +115,10 @@ fn the_error_bar_predicts_the_spread_of_h_over_seeds() {
     // of H over the seeds against the mean predicted error bar (relerr · H), and how often H
     // lies within ±2 predicted σ of its mean over the seeds.
     let scene = Scene::load("cube").unwrap();
-    let config = MethodConfig {
+    let config = GatherParams {
         rays: 256,
         rounds: Some(8),
-        ..MethodConfig::default()
+        ..GatherParams::default()
     };
     let seeds = 30;
     let aovs = [Aov::Relerr, Aov::Dmin];
@@ -178,11 +178,11 @@ fn the_error_bar_predicts_the_spread_of_h_over_seeds() {
 #[test]
 fn adaptive_is_the_same_for_1_and_2_threads_and_keeps_to_its_budget() {
     let scene = Scene::load("cube").unwrap();
-    let config = MethodConfig {
+    let config = AdaptiveParams {
         tolerance: 0.02,
         min_rays: 32,
         max_rays: 512,
-        ..MethodConfig::default()
+        ..AdaptiveParams::default()
     };
     let aovs = [Aov::Rays, Aov::Relerr];
     let one = try_rendered(&scene, "adaptive", config.clone(), 24, &aovs, 1, Some(1)).unwrap();
@@ -210,15 +210,15 @@ fn adaptive_is_the_same_for_1_and_2_threads_and_keeps_to_its_budget() {
 #[test]
 fn adaptive_stopping_at_its_first_check_is_gather_in_the_same_rounds() {
     let scene = Scene::load("cube").unwrap();
-    let adaptive = MethodConfig {
+    let adaptive = AdaptiveParams {
         tolerance: 1e9,
         min_rays: 64,
-        ..MethodConfig::default()
+        ..AdaptiveParams::default()
     };
-    let gather = MethodConfig {
+    let gather = GatherParams {
         rays: 64,
         rounds: Some(8),
-        ..MethodConfig::default()
+        ..GatherParams::default()
     };
     let a = rendered(&scene, "adaptive", adaptive, 16, &[], 3);
     let g = rendered(&scene, "gather", gather, 16, &[], 3);
@@ -227,9 +227,9 @@ fn adaptive_stopping_at_its_first_check_is_gather_in_the_same_rounds() {
     let single = rendered(
         &scene,
         "gather",
-        MethodConfig {
+        GatherParams {
             rays: 64,
-            ..MethodConfig::default()
+            ..GatherParams::default()
         },
         16,
         &[],
@@ -241,8 +241,9 @@ fn adaptive_stopping_at_its_first_check_is_gather_in_the_same_rounds() {
 #[test]
 fn aovs_a_method_cannot_give_are_refused_by_name() {
     let scene = Scene::load("cube").unwrap();
-    let refused = |method: &str, config: MethodConfig, aovs: &[Aov], name: &str| {
-        let estimator = registry::build(method, &config).unwrap();
+    let refused = |method: &str, config: serde_json::Value, aovs: &[Aov], name: &str| {
+        // Built without the AOVs (so `gather` keeps one round), then asked for them.
+        let estimator = registry::build(method, &config, &[]).unwrap();
         let options = RenderOptions {
             width: 4,
             height: 4,
@@ -257,20 +258,26 @@ fn aovs_a_method_cannot_give_are_refused_by_name() {
             "{e}"
         );
     };
-    let photons = MethodConfig {
+    let photons = PhotonParams {
         photons: 1000,
-        ..MethodConfig::default()
+        ..PhotonParams::default()
     };
-    refused("photon2", photons, &[Aov::Rays], "aov");
-    refused("gather", MethodConfig::default(), &[Aov::Relerr], "rounds");
-    refused("adaptive", MethodConfig::default(), &[Aov::Ao], "ao_radius");
+    refused(
+        "photon2",
+        serde_json::to_value(photons).unwrap(),
+        &[Aov::Rays],
+        "aov",
+    );
+    refused("gather", serde_json::json!({}), &[Aov::Relerr], "rounds");
+    refused("adaptive", serde_json::json!({}), &[Aov::Ao], "ao_radius");
     let e = registry::build(
         "gather",
-        &MethodConfig {
+        &GatherParams {
             rays: 60,
             rounds: Some(8),
-            ..MethodConfig::default()
+            ..GatherParams::default()
         },
+        &[],
     );
     assert!(matches!(
         e.err(),

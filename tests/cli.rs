@@ -346,10 +346,30 @@ fn bad_photon_arguments_exit_2_with_a_message_and_no_output() {
         "--photons",
     );
     refuses(
+        "nearest0",
+        &[],
+        &render_args(&["--method", "photon2", "--nearest", "0"]),
+        "--nearest",
+    );
+    // `--gather` is K's older name: the same refusal, spelled by K's name.
+    refuses(
         "gather0",
         &[],
         &render_args(&["--method", "photon2", "--gather", "0"]),
-        "--gather",
+        "--nearest must be at least 1",
+    );
+    // A flag the method does not read is refused, named, before anything is rendered.
+    refuses(
+        "unread",
+        &[],
+        &render_args(&["--method", "photon2", "--rays", "16"]),
+        "--method photon2 does not read --rays",
+    );
+    refuses(
+        "unread-backend",
+        &[],
+        &render_args(&["--method", "adaptive", "--backend", "cpu"]),
+        "--method adaptive does not read --backend",
     );
     refuses(
         "nolight",

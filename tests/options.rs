@@ -14,7 +14,12 @@ use hmdist::image::exr;
 /// `hmdist render --quiet` of `scene` in `dir` with 4 rays (at 8 × 8 unless `extra` gives a
 /// `--size`), writing `out` (.exr, and .png and .json beside it), with `extra` arguments.
 fn render(dir: &Scratch, scene: &str, out: &str, extra: &[&str]) {
-    let mut args = vec!["render", "--quiet", "--scene", scene, "--rays", "4", "--out", out];
+    let mut args = vec!["render", "--quiet", "--scene", scene, "--out", out];
+    // `--rays` only where the method reads it: another method refuses it.
+    let method = extra.windows(2).find(|w| w[0] == "--method").map(|w| w[1]);
+    if matches!(method, None | Some("gather" | "cubemap")) {
+        args.extend(["--rays", "4"]);
+    }
     if !extra.contains(&"--size") {
         args.extend(["--size", "8x8"]);
     }

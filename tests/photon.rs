@@ -44,7 +44,7 @@ fn inside_a_closed_sphere_both_methods_give_the_radius_from_light_and_from_camer
         for method in [PhotonMethod::StoredDistance, PhotonMethod::NextHitPoint] {
             let params = PhotonParams {
                 photons: 200_000,
-                gather: 256,
+                nearest: 256,
                 source,
                 ..PhotonParams::default()
             };
@@ -72,10 +72,10 @@ fn on_cube_method_two_is_closer_to_final_gathering_than_method_one() {
     let l_diag = scene.diagonal();
     let params = PhotonParams {
         photons: 500_000,
-        gather: 256,
+        nearest: 256,
         ..PhotonParams::default()
     };
-    let one = photon_image(&scene, PhotonMethod::StoredDistance, params, size, None).0;
+    let one = photon_image(&scene, PhotonMethod::StoredDistance, params.clone(), size, None).0;
     let two = photon_image(&scene, PhotonMethod::NextHitPoint, params, size, None).0;
     let (d1, d2) = (
         f_diff(&reference, &one, l_diag).unwrap(),
@@ -120,7 +120,7 @@ fn slab_photons(budget: usize) -> (Scene, Vec<TracedPhoton>) {
     let accel = Accel::build(&scene.mesh, BuildQuality::default());
     let (w, h) = (4, 4);
     let source = PhotonSource::Camera(scene.camera.rays(w, h), w, h);
-    let rules = PhotonParams::default().rules;
+    let rules = PhotonParams::default().rules();
     let traced = trace_photons(&accel, &source, rules, budget, DEFAULT_SEED, &|_| {}).unwrap();
     (scene, traced.photons)
 }
@@ -173,11 +173,11 @@ fn method_one_uses_the_photons_distance_and_method_two_the_distance_from_the_pix
     let points = primary_hits(&accel, &scene, size, size).points;
     let params = PhotonParams {
         photons: 1,
-        gather: 1,
+        nearest: 1,
         source: SourceKind::Camera,
         ..PhotonParams::default()
     };
-    let one = photon_image(&scene, PhotonMethod::StoredDistance, params, size, None).0;
+    let one = photon_image(&scene, PhotonMethod::StoredDistance, params.clone(), size, None).0;
     let two = photon_image(&scene, PhotonMethod::NextHitPoint, params, size, None).0;
     for ((h1, h2), point) in one.data.iter().zip(&two.data).zip(&points) {
         let x = point.expect("every pixel sees the floor").point;
@@ -207,11 +207,11 @@ fn same_photon_image_with_1_and_2_threads() {
     for (source, gather) in [(SourceKind::Camera, 64), (SourceKind::Light, 1024)] {
         let params = PhotonParams {
             photons: 100_000,
-            gather,
+            nearest: gather,
             source,
             ..PhotonParams::default()
         };
-        let one = photon_image(&scene, PhotonMethod::NextHitPoint, params, 32, Some(1)).0;
+        let one = photon_image(&scene, PhotonMethod::NextHitPoint, params.clone(), 32, Some(1)).0;
         let two = photon_image(&scene, PhotonMethod::NextHitPoint, params, 32, Some(2)).0;
         assert_eq!(bits(&one), bits(&two), "{} K = {gather}", source.name());
     }
@@ -231,30 +231,46 @@ fn bad_photon_parameters_are_refused() {
         );
         e.to_string()
     };
-    refused(PhotonParams { photons: 0, ..ok }, "photons");
-    refused(PhotonParams { gather: 0, ..ok }, "gather");
+    refused(
+        PhotonParams {
+            photons: 0,
+            ..ok.clone()
+        },
+        "photons",
+    );
+    refused(
+        PhotonParams {
+            nearest: 0,
+            ..ok.clone()
+        },
+        "nearest",
+    );
     let e = refused(
         PhotonParams {
             photons: usize::MAX / 64,
-            ..ok
+            ..ok.clone()
         },
         "photons",
     );
     assert!(e.contains("memory"), "{e}");
     refused(
         PhotonParams {
-            rules: PathRules {
-                max_bounces: 20,
-                absorption: 1.0,
-            },
-            ..ok
+            max_bounces: 20,
+            absorption: 1.0,
+            ..ok.clone()
         },
         "absorption",
     );
     // No spot light: refused when the estimate starts.
     let slab = validation::slab(1.0, 10.0);
-    let estimator =
-        PhotonEstimator::new(PhotonMethod::StoredDistance, PhotonParams { photons: 10, ..ok }).unwrap();
+    let estimator = PhotonEstimator::new(
+        PhotonMethod::StoredDistance,
+        PhotonParams {
+            photons: 10,
+            ..ok.clone()
+        },
+    )
+    .unwrap();
     let options = RenderOptions {
         width: 4,
         height: 4,
@@ -294,7 +310,7 @@ fn kiddo_reference(scene: &Scene, method: PhotonMethod, params: PhotonParams, si
     let traced = trace_photons(
         &accel,
         &source,
-        params.rules,
+        params.rules(),
         params.photons,
         DEFAULT_SEED,
         &|_| {},
@@ -309,7 +325,7 @@ fn kiddo_reference(scene: &Scene, method: PhotonMethod, params: PhotonParams, si
     let positions: Vec<[f32; 3]> = photons.iter().map(|p| p.position.to_array()).collect();
     let tree: ImmutableKdTree<f32, u32, 3, 32> = ImmutableKdTree::new_from_slice(&positions);
     let r2 = params.max_radius.map_or(f32::INFINITY, |r| r * r);
-    let more = std::num::NonZero::new(params.gather + 16).unwrap();
+    let more = std::num::NonZero::new(params.nearest + 16).unwrap();
     let clamp = DistanceClamp::for_diagonal(scene.diagonal(), None);
     let gbuffer = primary_hits(&accel, scene, size, size);
     gbuffer
@@ -324,7 +340,7 @@ fn kiddo_reference(scene: &Scene, method: PhotonMethod, params: PhotonParams, si
                 .map(|f| (f.distance.to_bits(), rank[f.item as usize]))
                 .collect();
             near.sort_unstable();
-            near.truncate(params.gather);
+            near.truncate(params.nearest);
             near.sort_by_key(|&(_, r)| r);
             let mut mean = HarmonicMean::default();
             for (_, r) in near {
@@ -357,12 +373,12 @@ fn the_maps_gather_equals_kiddos_k_nearest_bit_for_bit() {
             for method in [PhotonMethod::StoredDistance, PhotonMethod::NextHitPoint] {
                 let params = PhotonParams {
                     photons: 200_000,
-                    gather,
+                    nearest: gather,
                     source,
                     max_radius,
                     ..PhotonParams::default()
                 };
-                let (image, report) = photon_image(&scene, method, params, 64, None);
+                let (image, report) = photon_image(&scene, method, params.clone(), 64, None);
                 let reference = kiddo_reference(&scene, method, params, 64);
                 let different = image
                     .data

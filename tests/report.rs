@@ -17,20 +17,14 @@ const PHOTONS: u64 = 500;
 fn report(dir: &Scratch, test: &str, method_args: &[&str]) -> Option<Value> {
     let rays = RAYS.to_string();
     let photons = PHOTONS.to_string();
-    let mut args = vec![
-        "render",
-        "--quiet",
-        "--scene",
-        "floor.toml",
-        "--size",
-        "8x8",
-        "--rays",
-        &rays,
-        "--photons",
-        &photons,
-        "--gather",
-        "8",
-    ];
+    let mut args = vec!["render", "--quiet", "--scene", "floor.toml", "--size", "8x8"];
+    // Each method is given only the flags it reads (another method's flag is refused).
+    let method = method_args.windows(2).find(|w| w[0] == "--method").map(|w| w[1]);
+    if matches!(method, Some("photon1" | "photon2")) {
+        args.extend_from_slice(&["--photons", &photons, "--gather", "8"]);
+    } else {
+        args.extend_from_slice(&["--rays", &rays]);
+    }
     args.extend_from_slice(method_args);
     let out = hmdist(dir.path(), &args);
     let stderr = String::from_utf8_lossy(&out.stderr);

@@ -137,8 +137,6 @@ fn a_merged_report_counts_the_whole_image_not_shard_0_and_draws_the_png_at_the_p
             "40x27",
             "--method",
             "adaptive",
-            "--rays",
-            "16",
             "--max-rays",
             "256",
             "--tolerance",

@@ -83,9 +83,11 @@ class Scene:
     def render(self, camera=None, method="gather", *, progress=False, aov=None, **params):
         """H per pixel (float32 [height, width]) and the report (a dict with the JSON
         sidecar's keys). `camera` defaults to the scene's own (then `size=(w, h)`, default
-        1024 × 1024); `params` are `hmdist render`'s flags with underscores: rays, seed,
-        weighting, photons, gather, source, cube_res, backend, max_distance, threads,
-        rounds, ao_radius, ... With `aov` (names: relerr, rays, dmin, ao, escaped) a third
+        1024 × 1024); `params` are `hmdist render`'s flags with underscores: the render's own
+        (size, seed, threads, max_distance, bvh) and the method's (gather: rays, weighting,
+        rounds, ao_radius, backend; cubemap: cube_res, ...; photon1/photon2: photons,
+        nearest (or its older name gather), source, photon_map, ...). A name the method does
+        not read is a ValueError. With `aov` (names: relerr, rays, dmin, ao, escaped) a third
         value is returned: a dict of float32 [height, width] arrays by name.
 
         Ctrl-C stops the render within a fraction of a second and raises KeyboardInterrupt;

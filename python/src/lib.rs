@@ -17,11 +17,11 @@ use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUnty
 use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyKeyboardInterrupt, PyOSError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyString};
 
 use hmdist::accel::{Accel, BuildQuality, Kernel, RayCaster};
 use hmdist::error::Error;
-use hmdist::estimators::{registry, Aov, Gather, MethodConfig};
+use hmdist::estimators::{registry, Aov, Estimator, Gather};
 use hmdist::image::HmdImage;
 use hmdist::points::{hmd_at, PointQuery, SurfacePoint};
 use hmdist::progress::{Progress, Silent};
@@ -300,7 +300,6 @@ impl PyScene {
         progress: bool,
         aov: Vec<String>,
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyDict>)> {
-        let (config, mut options) = configure(params)?;
         let mut aovs = Vec::new();
         for name in &aov {
             let aov = Aov::parse(name).map_err(py_error)?;
@@ -308,8 +307,8 @@ impl PyScene {
                 aovs.push(aov);
             }
         }
-        options.aovs = aovs.clone();
-        let estimator = registry::build(method, &config.for_aovs(&aovs)).map_err(py_error)?;
+        let (estimator, mut options) = configure(method, params, &aovs)?;
+        options.aovs = aovs;
         let original = self.scene.camera;
         if let Some(c) = &camera {
             self.scene.camera = c.camera;
@@ -531,39 +530,73 @@ fn named<T: serde::de::DeserializeOwned>(key: &str, name: &str) -> PyResult<T> {
         .map_err(|e| value_error(format!("{key}: {e}")))
 }
 
-/// The method configuration and render options from the keyword parameters; an unknown
-/// name is a `ValueError`.
-fn configure(params: &Bound<'_, PyDict>) -> PyResult<(MethodConfig, RenderOptions)> {
-    let mut c = MethodConfig::default();
-    let mut o = RenderOptions::default();
+/// The estimator and the render options from the keyword parameters: the render options'
+/// own (`size`, `seed`, `threads`, `max_distance`, `bvh`), and method `method`'s, which its
+/// parameter struct reads by name (`hmdist render`'s flags with underscores). A name the
+/// method does not read is a `ValueError`.
+fn configure(
+    method: &str,
+    params: &Bound<'_, PyDict>,
+    aovs: &[Aov],
+) -> PyResult<(Box<dyn Estimator>, RenderOptions)> {
+    let mut o = RenderOptions {
+        kernel: Kernel::from_env().map_err(py_error)?,
+        ..RenderOptions::default()
+    };
+    let mut method_params = serde_json::Map::new();
     for (key, value) in params.iter() {
         let key: String = key.extract()?;
         let bad = |e: PyErr| value_error(format!("{key}: {e}"));
         match key.as_str() {
-            "rays" => c.rays = value.extract().map_err(bad)?,
-            "weighting" => c.weighting = named(&key, &value.extract::<String>().map_err(bad)?)?,
-            "rounds" => c.rounds = value.extract().map_err(bad)?,
-            "ao_radius" => c.ao_radius = value.extract().map_err(bad)?,
-            "tolerance" => c.tolerance = value.extract().map_err(bad)?,
-            "min_rays" => c.min_rays = value.extract().map_err(bad)?,
-            "max_rays" => c.max_rays = value.extract().map_err(bad)?,
-            "cube_res" => c.cube_res = value.extract().map_err(bad)?,
-            "backend" => c.backend = named(&key, &value.extract::<String>().map_err(bad)?)?,
-            "photons" => c.photons = value.extract().map_err(bad)?,
-            "gather" => c.gather = value.extract().map_err(bad)?,
-            "source" => c.source = named(&key, &value.extract::<String>().map_err(bad)?)?,
-            "max_bounces" => c.max_bounces = value.extract().map_err(bad)?,
-            "absorption" => c.absorption = value.extract().map_err(bad)?,
-            "max_radius" => c.max_radius = value.extract().map_err(bad)?,
             "seed" => o.seed = value.extract().map_err(bad)?,
             "threads" => o.threads = value.extract().map_err(bad)?,
             "max_distance" => o.max_distance = value.extract().map_err(bad)?,
             "size" => (o.width, o.height) = value.extract().map_err(bad)?,
             "bvh" => o.bvh_quality = named(&key, &value.extract::<String>().map_err(bad)?)?,
-            other => return Err(value_error(format!("unknown parameter '{other}'"))),
+            _ => {
+                let value = json_value(&key, &value)?;
+                method_params.insert(key, value);
+            }
         }
     }
-    Ok((c, o))
+    let entry = registry::method(method).map_err(py_error)?;
+    let estimator = entry.build(&method_params, aovs).map_err(py_error)?;
+    Ok((estimator, o))
+}
+
+/// A keyword's value as JSON, for a method's parameter struct: None, a bool, an int, a finite
+/// float, a str or a path.
+fn json_value(key: &str, value: &Bound<'_, PyAny>) -> PyResult<serde_json::Value> {
+    use serde_json::Value;
+    if value.is_none() {
+        return Ok(Value::Null);
+    }
+    if value.is_instance_of::<PyBool>() {
+        return Ok(Value::Bool(value.extract()?));
+    }
+    if value.is_instance_of::<PyInt>() {
+        return match value.extract::<i64>() {
+            Ok(i) => Ok(i.into()),
+            Err(_) => Ok(value
+                .extract::<u64>()
+                .map_err(|e| value_error(format!("{key}: {e}")))?
+                .into()),
+        };
+    }
+    if value.is_instance_of::<PyFloat>() {
+        let x: f64 = value.extract()?;
+        return serde_json::Number::from_f64(x)
+            .map(Value::Number)
+            .ok_or_else(|| value_error(format!("bad parameter: {key} must be a finite number, not {x}")));
+    }
+    if value.is_instance_of::<PyString>() {
+        return Ok(Value::String(value.extract()?));
+    }
+    if value.hasattr("__fspath__")? {
+        return Ok(Value::String(value.call_method0("__fspath__")?.extract()?));
+    }
+    let kind = value.get_type().name()?;
+    Err(value_error(format!("{key}: a {kind} is not a parameter value")))
 }
 
 #[pymodule]

@@ -50,7 +50,8 @@ def test_render_equals_the_clis_exr_bit_for_bit(tmp_path, method, args):
     exr = tmp_path / "h.exr"
     subprocess.run([CLI, "render", "--quiet", "--scene", "cube", "--method", method,
                     "--size", "40x30", "--seed", "5", "--out", str(exr), *args], check=True)
-    params = {"rays": 32} if method == "gather" else {"photons": 20000, "gather": 64}
+    # `gather` is K's older name (`nearest`): both spellings are kept.
+    params = {"rays": 32} if method == "gather" else {"photons": 20000, "nearest": 64}
     H, report = hmdist.Scene.builtin("cube").render(method=method, size=(40, 30), seed=5, **params)
     cli = hmdist.read_exr(exr)
     assert cli.shape == H.shape == (30, 40)
@@ -116,6 +117,13 @@ def test_bad_arrays_and_parameters_raise_the_right_exception(tmp_path):
         s.hmd_at(np.zeros((1, 3)), n, rays=0)
     with pytest.raises(ValueError, match="unknown parameter 'ray'"):
         s.render(ray=4, size=(4, 4))
+    # A parameter of another method is refused, named; a photon-map path is read as a path.
+    with pytest.raises(ValueError, match="unknown parameter 'rays' for method photon2"):
+        s.render(method="photon2", rays=4, size=(4, 4))
+    with pytest.raises(ValueError, match="rays: invalid type"):
+        s.render(rays="many", size=(4, 4))
+    with pytest.raises(OSError, match="missing.map"):
+        s.render(method="photon2", photon_map=tmp_path / "missing.map", size=(4, 4))
     with pytest.raises(ValueError, match="method"):
         s.render(method="raymarch", size=(4, 4))
     with pytest.raises(ValueError, match="refers to vertex 9"):

@@ -107,8 +107,9 @@ pub struct Accel {
 }
 
 impl Accel {
-    /// Builds the BVH (`Auto` builds `High`: resolve it first where the work is known); the
-    /// kernel is [`Kernel::from_env`], or the best one if that fails.
+    /// Builds the BVH (`Auto` builds `High`: resolve it first where the work is known), with
+    /// the best kernel ([`Kernel::best`]; [`Accel::with_kernel`] picks another). The library
+    /// never reads `HMDIST_KERNEL`: the CLI and Python do ([`Kernel::from_env`]).
     pub fn build(mesh: &Mesh, quality: BuildQuality) -> Accel {
         let bvh = WideBvh::build(mesh, quality.builder());
         let mut location = vec![0u32; mesh.triangle_count()];
@@ -119,7 +120,7 @@ impl Accel {
         }
         Accel {
             bvh,
-            kernel: Kernel::from_env().unwrap_or_else(|_| Kernel::best()),
+            kernel: Kernel::best(),
             location,
         }
     }
@@ -230,7 +231,7 @@ impl Accel {
             let stack = self.stack(&mut inline, &mut heap);
             let packet_stack = self.stack(&mut inline_packet, &mut heap_packet);
             let (bvh, searches) = (&self.bvh, &mut searches[..n]);
-            // SAFETY: `with_kernel` and `Kernel::from_env` only choose kernels the CPU has.
+            // SAFETY: `Kernel::best` and `with_kernel` only choose kernels the CPU has.
             unsafe {
                 if self.kernel == Kernel::Avx2 {
                     closest_packet_avx2(bvh, &rays[..n], searches, packet_stack, stack, counter);
@@ -291,7 +292,7 @@ impl Accel {
         let stack = self.stack(&mut inline, &mut heap);
         match self.kernel {
             #[cfg(target_arch = "x86_64")]
-            // SAFETY: `with_kernel` and `Kernel::from_env` only choose kernels the CPU has.
+            // SAFETY: `Kernel::best` and `with_kernel` only choose kernels the CPU has.
             Kernel::Avx2 => unsafe {
                 super::kernel::avx2::closest_avx2(&self.bvh, ray, t_max, &accept, stack, counter)
             },

@@ -57,7 +57,9 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
     let preset = args.preset;
     select(&args.name)?;
     let bar = Bar::new(args.quiet);
-    let mut runner = Runner::new(&args.scene, preset, &args.out, &bar)?.with_backend(args.backend);
+    let mut runner = Runner::new(&args.scene, preset, &args.out, &bar)?
+        .with_backend(args.backend)
+        .with_kernel(hmdist::accel::Kernel::from_env()?);
     if let Some(shard) = args.shard {
         runner = runner.with_shard(shard)?;
     }

@@ -6,9 +6,8 @@ use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
 
-use hmdist::error::Result;
-use hmdist::estimators::photon::PhotonMethod;
-use hmdist::estimators::MethodConfig;
+use hmdist::error::{Error, Result};
+use hmdist::estimators::photon::{PhotonEstimator, PhotonMethod, PhotonParams};
 use hmdist::image::write_atomically;
 use hmdist::scene::Scene;
 
@@ -29,7 +28,7 @@ pub struct BuildArgs {
     #[arg(long, default_value = "photon2", value_parser = ["photon1", "photon2"])]
     method: String,
     #[command(flatten)]
-    config: MethodConfig,
+    params: PhotonParams,
     /// The renders' size, seed and BVH preset: camera-sourced photons depend on the size,
     /// and the BVH preset is chosen by it.
     #[command(flatten)]
@@ -48,12 +47,12 @@ pub fn run(command: PhotonsCommand) -> Result<()> {
         "photon1" => PhotonMethod::StoredDistance,
         _ => PhotonMethod::NextHitPoint,
     };
-    let config = MethodConfig {
-        photon_map: None,
-        ..args.config.clone()
-    };
-    let estimator = config.photon_estimator(method)?;
-    let options = args.image.options();
+    if args.params.photon_map.is_some() {
+        let message = "is what `photons build` writes (--out), not something it reads";
+        return Err(Error::invalid("photon_map", message));
+    }
+    let estimator = PhotonEstimator::new(method, args.params.clone())?;
+    let options = args.image.options()?;
     let bar = Bar::new(args.quiet);
     bar.status("loading");
     let scene = Scene::load(&args.scene)?;
@@ -65,7 +64,7 @@ pub fn run(command: PhotonsCommand) -> Result<()> {
             "{}: {} map of {} photons in {:.2} s, {:.1} MB -> {}",
             scene.name,
             method.name(),
-            config.photons,
+            args.params.photons,
             start.elapsed().as_secs_f64(),
             bytes.len() as f64 / 1e6,
             args.out.display()

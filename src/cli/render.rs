@@ -1,6 +1,7 @@
 //! `hmdist render`: one HMD image of one scene by one method. Flags map onto the library's
-//! [`RenderOptions`] and [`MethodConfig`] (whose fields are the method flags); the work is
-//! [`render`]'s.
+//! [`RenderOptions`] and onto the chosen method's parameter struct (every method's flags are
+//! offered; [`registry::flags`] makes them, and a flag the method does not read is refused);
+//! the work is [`render`]'s.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -8,7 +9,7 @@ use std::time::Instant;
 use clap::Args;
 
 use hmdist::error::{Error, Result};
-use hmdist::estimators::registry::{self, MethodConfig, METHODS};
+use hmdist::estimators::registry::{self, METHODS};
 use hmdist::estimators::Aov;
 use hmdist::image::{exr, picture, OutputSet};
 use hmdist::render::{render, RenderOptions};
@@ -26,7 +27,7 @@ pub struct RenderArgs {
     #[arg(long, default_value = "gather", value_parser = method_names())]
     method: String,
     #[command(flatten)]
-    config: MethodConfig,
+    method_flags: MethodFlags,
     #[command(flatten)]
     image: super::ImageArgs,
     /// Clamp distances at D; escaping rays then count as D [default: no clamp].
@@ -66,6 +67,34 @@ pub struct RenderArgs {
     quiet: bool,
 }
 
+/// Every method's flags (`--rays`, `--photons`, ...), kept as parsed until the method named
+/// by `--method` reads its own from them.
+pub struct MethodFlags(clap::ArgMatches);
+
+impl clap::FromArgMatches for MethodFlags {
+    fn from_arg_matches(matches: &clap::ArgMatches) -> std::result::Result<Self, clap::Error> {
+        Ok(MethodFlags(matches.clone()))
+    }
+
+    fn update_from_arg_matches(
+        &mut self,
+        matches: &clap::ArgMatches,
+    ) -> std::result::Result<(), clap::Error> {
+        self.0 = matches.clone();
+        Ok(())
+    }
+}
+
+impl clap::Args for MethodFlags {
+    fn augment_args(cmd: clap::Command) -> clap::Command {
+        registry::flags(cmd)
+    }
+
+    fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
+        registry::flags(cmd)
+    }
+}
+
 pub(super) fn parse_shard(text: &str) -> std::result::Result<Shard, String> {
     Shard::parse(text).map_err(|e| e.describe(|_| "--shard".into()))
 }
@@ -89,13 +118,12 @@ pub fn run(args: RenderArgs) -> Result<()> {
         pictures.push((aov, PathBuf::from(&pair[1])));
     }
     aovs.dedup();
-    let config = args.config.clone().for_aovs(&aovs);
-    let estimator = registry::build(&args.method, &config)?;
+    let estimator = registry::method(&args.method)?.build_from_flags(&args.method_flags.0, &aovs)?;
     let options = RenderOptions {
         max_distance: args.max_distance,
         aovs,
         shard: args.shard,
-        ..args.image.options()
+        ..args.image.options()?
     };
     options.validate()?;
     if let Some(s) = args.scale.filter(|s| !(s.is_finite() && *s > 0.0)) {

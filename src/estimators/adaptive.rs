@@ -28,6 +28,63 @@ pub const DEFAULT_MAX_RAYS: u32 = 4096;
 /// Rounds before the first check.
 pub const FIRST_ROUNDS: u32 = 8;
 
+/// `adaptive`'s parameters: the CLI's flags, Python's keywords and the registry's build all
+/// come from this one list.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
+pub struct AdaptiveParams {
+    /// Direction weighting over the hemisphere.
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Weighting::Cosine))]
+    pub weighting: Weighting,
+    /// A pixel stops once the relative standard error of its H is below T.
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_name = "T", default_value_t = DEFAULT_TOLERANCE, help_heading = "AOVs and adaptive")
+    )]
+    pub tolerance: f32,
+    /// Rays before the first check, as 8 rounds (a multiple of 8).
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_name = "m", default_value_t = DEFAULT_MIN_RAYS, help_heading = "AOVs and adaptive")
+    )]
+    pub min_rays: u32,
+    /// A pixel never casts more rays than this.
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_name = "M", default_value_t = DEFAULT_MAX_RAYS, help_heading = "AOVs and adaptive")
+    )]
+    pub max_rays: u32,
+    /// Radius of the ao AOV [default: the median of the image's H; needed for adaptive].
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_name = "R", help_heading = "AOVs and adaptive")
+    )]
+    pub ao_radius: Option<f32>,
+}
+
+impl Default for AdaptiveParams {
+    fn default() -> Self {
+        AdaptiveParams {
+            weighting: Weighting::default(),
+            tolerance: DEFAULT_TOLERANCE,
+            min_rays: DEFAULT_MIN_RAYS,
+            max_rays: DEFAULT_MAX_RAYS,
+            ao_radius: None,
+        }
+    }
+}
+
+impl super::params::MethodParams for AdaptiveParams {}
+
+impl AdaptiveParams {
+    /// The adaptive gather these parameters name, checked.
+    pub fn build(&self) -> Result<Adaptive> {
+        Adaptive::new(self.weighting, self.tolerance, self.min_rays, self.max_rays)?
+            .with_ao_radius(self.ao_radius)
+    }
+}
+
 /// Adaptive final gathering.
 #[derive(Clone, Copy, Debug)]
 pub struct Adaptive {

@@ -48,6 +48,64 @@ pub struct Gather {
 /// Rounds of gather rays when the `relerr` AOV is asked for and no rounds are named.
 pub const DEFAULT_ERROR_ROUNDS: u32 = 8;
 
+/// `gather`'s parameters: the CLI's flags (`--rays`), Python's keywords and the registry's
+/// build all come from this one list.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
+pub struct GatherParams {
+    /// Gather rays per pixel N (the paper's reference is 65536).
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = DEFAULT_RAYS))]
+    pub rays: u32,
+    /// Direction weighting over the hemisphere.
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Weighting::Cosine))]
+    pub weighting: Weighting,
+    /// Cast the rays as R independent rounds (R divides N), for the relerr AOV
+    /// [default: 1; 8 with --aov relerr].
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_name = "R", help_heading = "AOVs and adaptive")
+    )]
+    pub rounds: Option<u32>,
+    /// Radius of the ao AOV [default: the median of the image's H; needed for adaptive].
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_name = "R", help_heading = "AOVs and adaptive")
+    )]
+    pub ao_radius: Option<f32>,
+    /// Where the rays are cast (or the hemicubes built).
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Backend::Auto))]
+    pub backend: Backend,
+}
+
+impl Default for GatherParams {
+    fn default() -> Self {
+        GatherParams {
+            rays: DEFAULT_RAYS,
+            weighting: Weighting::default(),
+            rounds: None,
+            ao_radius: None,
+            backend: Backend::default(),
+        }
+    }
+}
+
+impl super::params::MethodParams for GatherParams {
+    fn for_aovs(&mut self, aovs: &[super::Aov]) {
+        if aovs.contains(&super::Aov::Relerr) {
+            self.rounds.get_or_insert(DEFAULT_ERROR_ROUNDS);
+        }
+    }
+}
+
+impl GatherParams {
+    /// The gather these parameters name, checked.
+    pub fn build(&self) -> Result<Gather> {
+        let gather = Gather::new(self.rays, self.weighting)?.with_rounds(self.rounds.unwrap_or(1))?;
+        Ok(gather.with_ao_radius(self.ao_radius)?.with_backend(self.backend))
+    }
+}
+
 impl Gather {
     /// `rays` gather rays per point (at least 1), weighted by `weighting`.
     pub fn new(rays: u32, weighting: Weighting) -> Result<Self> {

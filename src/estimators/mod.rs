@@ -8,9 +8,10 @@
 //! image at once (the GPU hemicube, which rasterises batches of pixels) returns its finished
 //! [`Estimate`] from `prepare` instead.
 //!
-//! **Adding a fifth estimator** is one new module implementing [`Estimator`] (its pixel in a
-//! [`PixelWorker`]) plus one line in [`registry::METHODS`]; the CLI's `--method`, the
-//! experiments and the report pick it up from there.
+//! **Adding a sixth estimator** is one new module implementing [`Estimator`] (its pixel in a
+//! [`PixelWorker`]) with its parameter struct ([`MethodParams`]), plus one line in
+//! [`registry::METHODS`]; the CLI's `--method` and flags, Python's keywords, the experiments
+//! and the report pick it up from there.
 //!
 //! Conventions: distances in scene units; a pixel's normal faces the camera (surfaces are
 //! two-sided); H is `+inf` where every sample escaped and NaN for background pixels and holes.
@@ -20,18 +21,19 @@ pub mod aov;
 pub mod cubemap;
 pub mod gather;
 mod harmonic;
+pub mod params;
 pub mod pass;
 pub mod photon;
 pub mod registry;
 
 pub use crate::backend::Backend;
-pub use adaptive::Adaptive;
+pub use adaptive::{Adaptive, AdaptiveParams};
 pub use aov::{Aov, AovImage, AovSample};
-pub use cubemap::Cubemap;
-pub use gather::Gather;
+pub use cubemap::{Cubemap, CubemapParams};
+pub use gather::{Gather, GatherParams};
 pub use harmonic::{DistanceClamp, HarmonicMean};
-pub use photon::PhotonEstimator;
-pub use registry::{MethodConfig, MethodEntry, METHODS};
+pub use photon::{PhotonEstimator, PhotonParams};
+pub use registry::{MethodEntry, MethodParams, METHODS};
 
 use crate::accel::{Accel, Hit};
 use crate::error::Result;

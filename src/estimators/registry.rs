@@ -1,242 +1,174 @@
 //! The registry of methods: one entry per estimator, with its name, a sentence on what it is,
-//! the parameters it reads and its constructor. The CLI's `--method`, the experiments and the
-//! Python package all build estimators from here; a new estimator is one new line.
+//! and its one parameter struct ([`MethodParams`]: [`GatherParams`], [`CubemapParams`], ...),
+//! which lives beside the estimator. The CLI's method flags, Python's keywords, the experiments
+//! and the tests all build estimators from here, so a parameter is one field in one struct and
+//! a new estimator is one module plus one `method!` line in [`METHODS`].
+//!
+//! Parameters travel between the layers as a JSON object (`{"rays": 256}`): Python's keywords
+//! arrive as one, a typed struct serialises to one, and each entry deserialises it into its
+//! own struct, refusing by name what its method does not read.
 
-use super::adaptive::{self, Adaptive};
+use serde::Serialize;
+use serde_json::{Map, Value};
+
+use super::adaptive::AdaptiveParams;
 use super::aov::Aov;
-use super::cubemap::{self, Cubemap};
-use super::gather::{self, Gather, DEFAULT_ERROR_ROUNDS};
-use super::photon::{self, PathRules, PhotonEstimator, PhotonMethod, PhotonParams, SourceKind};
+use super::cubemap::CubemapParams;
+use super::gather::GatherParams;
+pub use super::params::{Flags, MethodParams};
+use super::photon::{PhotonEstimator, PhotonMethod, PhotonParams};
 use super::Estimator;
-use crate::backend::Backend;
 use crate::error::{Error, Result};
-use crate::sampling::Weighting;
 
-/// Every method parameter, with the library's defaults; each method reads the ones its
-/// [`MethodEntry::parameters`] names, and its constructor checks them. With the `cli`
-/// feature these are also `hmdist render`'s flags (`rays` is `--rays`).
-#[derive(Clone, Debug, PartialEq)]
-#[cfg_attr(feature = "cli", derive(clap::Args))]
-pub struct MethodConfig {
-    /// Gather rays per pixel N, for gather and cubemap (the paper's reference is 65536).
-    #[cfg_attr(feature = "cli", arg(long, default_value_t = gather::DEFAULT_RAYS))]
-    pub rays: u32,
-    /// Direction weighting over the hemisphere.
-    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Weighting::Cosine))]
-    pub weighting: Weighting,
-    /// gather: cast the rays as R independent rounds (R divides N), for the relerr AOV
-    /// [default: 1; 8 with --aov relerr].
-    #[cfg_attr(
-        feature = "cli",
-        arg(long, value_name = "R", help_heading = "AOVs and adaptive")
-    )]
-    pub rounds: Option<u32>,
-    /// Radius of the ao AOV [default: the median of the image's H; needed for adaptive].
-    #[cfg_attr(
-        feature = "cli",
-        arg(long, value_name = "R", help_heading = "AOVs and adaptive")
-    )]
-    pub ao_radius: Option<f32>,
-    /// adaptive: a pixel stops once the relative standard error of its H is below T.
-    #[cfg_attr(
-        feature = "cli",
-        arg(long, value_name = "T", default_value_t = adaptive::DEFAULT_TOLERANCE, help_heading = "AOVs and adaptive")
-    )]
-    pub tolerance: f32,
-    /// adaptive: rays before the first check, as 8 rounds (a multiple of 8).
-    #[cfg_attr(
-        feature = "cli",
-        arg(long, value_name = "m", default_value_t = adaptive::DEFAULT_MIN_RAYS, help_heading = "AOVs and adaptive")
-    )]
-    pub min_rays: u32,
-    /// adaptive: a pixel never casts more rays than this.
-    #[cfg_attr(
-        feature = "cli",
-        arg(long, value_name = "M", default_value_t = adaptive::DEFAULT_MAX_RAYS, help_heading = "AOVs and adaptive")
-    )]
-    pub max_rays: u32,
-    /// Per-quadrant hemicube resolution R: top face 2R x 2R, sides 2R x R.
-    #[cfg_attr(
-        feature = "cli",
-        arg(long, default_value_t = cubemap::DEFAULT_CUBE_RES, help_heading = "Cube map")
-    )]
-    pub cube_res: u32,
-    /// Where gather casts its rays and the cube map builds its hemicubes.
-    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Backend::Auto))]
-    pub backend: Backend,
-    /// Photons stored P, exactly.
-    #[cfg_attr(
-        feature = "cli",
-        arg(long, default_value_t = photon::DEFAULT_PHOTONS, help_heading = "Photon methods")
-    )]
-    pub photons: usize,
-    /// Nearest photons gathered per pixel K.
-    #[cfg_attr(
-        feature = "cli",
-        arg(long, default_value_t = photon::DEFAULT_GATHER, help_heading = "Photon methods")
-    )]
-    pub gather: usize,
-    /// Where paths start.
-    #[cfg_attr(
-        feature = "cli",
-        arg(long, value_enum, default_value_t = SourceKind::Light, help_heading = "Photon methods")
-    )]
-    pub source: SourceKind,
-    /// A path ends at this many surface interactions.
-    #[cfg_attr(
-        feature = "cli",
-        arg(long, default_value_t = photon::DEFAULT_MAX_BOUNCES, help_heading = "Photon methods")
-    )]
-    pub max_bounces: u32,
-    /// Probability that a path ends at each interaction.
-    #[cfg_attr(
-        feature = "cli",
-        arg(long, default_value_t = photon::DEFAULT_ABSORPTION, help_heading = "Photon methods")
-    )]
-    pub absorption: f32,
-    /// Gather over this photon map file (from `hmdist photons build`) instead of tracing one.
-    #[cfg_attr(
-        feature = "cli",
-        arg(long, value_name = "FILE", help_heading = "Photon methods")
-    )]
-    pub photon_map: Option<std::path::PathBuf>,
-    /// Gather only within this distance of the pixel [default: no limit].
-    #[cfg_attr(feature = "cli", arg(long, value_name = "R", help_heading = "Photon methods"))]
-    pub max_radius: Option<f32>,
-}
-
-impl Default for MethodConfig {
-    fn default() -> Self {
-        MethodConfig {
-            rays: gather::DEFAULT_RAYS,
-            weighting: Weighting::default(),
-            rounds: None,
-            ao_radius: None,
-            tolerance: adaptive::DEFAULT_TOLERANCE,
-            min_rays: adaptive::DEFAULT_MIN_RAYS,
-            max_rays: adaptive::DEFAULT_MAX_RAYS,
-            cube_res: cubemap::DEFAULT_CUBE_RES,
-            backend: Backend::default(),
-            photons: photon::DEFAULT_PHOTONS,
-            gather: photon::DEFAULT_GATHER,
-            source: SourceKind::default(),
-            max_bounces: photon::DEFAULT_MAX_BOUNCES,
-            absorption: photon::DEFAULT_ABSORPTION,
-            max_radius: None,
-            photon_map: None,
-        }
-    }
-}
-
-impl MethodConfig {
-    /// The configuration for an image with `aovs`: `rounds` defaults to
-    /// [`DEFAULT_ERROR_ROUNDS`] where `relerr` is asked for.
-    pub fn for_aovs(mut self, aovs: &[Aov]) -> Self {
-        if aovs.contains(&Aov::Relerr) {
-            self.rounds.get_or_insert(DEFAULT_ERROR_ROUNDS);
-        }
-        self
-    }
-
-    fn gather(&self) -> Result<Gather> {
-        Gather::new(self.rays, self.weighting)
-    }
-
-    /// The cube map this configuration names (what `build("cubemap", ..)` boxes).
-    pub fn cubemap(&self) -> Result<Cubemap> {
-        Cubemap::new(self.gather()?, self.cube_res, self.backend)
-    }
-
-    /// Method `method` with this configuration's photon parameters, over its `photon_map`
-    /// file where it names one.
-    pub fn photon_estimator(&self, method: PhotonMethod) -> Result<PhotonEstimator> {
-        let estimator = PhotonEstimator::new(method, self.photon_params())?;
-        match &self.photon_map {
-            Some(path) => {
-                let bytes = std::fs::read(path).map_err(|e| Error::io(path, "read", e))?;
-                estimator.with_map_file(&bytes, path)
-            }
-            None => Ok(estimator),
-        }
-    }
-
-    fn photon_params(&self) -> PhotonParams {
-        PhotonParams {
-            photons: self.photons,
-            gather: self.gather,
-            source: self.source,
-            rules: PathRules {
-                max_bounces: self.max_bounces,
-                absorption: self.absorption,
-            },
-            max_radius: self.max_radius,
-        }
-    }
-}
-
-/// One method: what the CLI, the experiments and Python know of it.
+/// One method: what the CLI, the experiments and Python know of it. Made by [`method!`].
 pub struct MethodEntry {
     /// The name `--method` takes and the report's `method`.
     pub name: &'static str,
     /// One sentence on what it is.
     pub summary: &'static str,
-    /// The [`MethodConfig`] fields it reads.
-    pub parameters: &'static [&'static str],
-    /// Builds the estimator from the configuration, checking its parameters.
-    pub build: fn(&MethodConfig) -> Result<Box<dyn Estimator>>,
+    defaults: fn() -> Map<String, Value>,
+    from_object: fn(&Map<String, Value>, &[Aov]) -> Result<Box<dyn Estimator>>,
+    #[cfg(feature = "cli")]
+    flags: fn(clap::Command) -> clap::Command,
+    #[cfg(feature = "cli")]
+    from_flags: fn(&clap::ArgMatches, &[Aov]) -> Result<Box<dyn Estimator>>,
+}
+
+/// A registry entry: `method!("name", "summary", |p: Params| build)`, where `build` makes the
+/// estimator (a `Result<Box<dyn Estimator>>`) from `p`, the parameters with their defaults
+/// filled in and adjusted for the AOVs asked for ([`MethodParams::for_aovs`]).
+macro_rules! method {
+    ($name:literal, $summary:literal, |$p:ident: $params:ty| $build:expr) => {
+        MethodEntry {
+            name: $name,
+            summary: $summary,
+            defaults: defaults::<$params>,
+            from_object: |object, aovs| {
+                let mut $p: $params = from_object($name, object)?;
+                $p.for_aovs(aovs);
+                $build
+            },
+            #[cfg(feature = "cli")]
+            flags: <$params as clap::Args>::augment_args,
+            #[cfg(feature = "cli")]
+            from_flags: |matches, aovs| {
+                let mut $p: $params = from_flags(matches)?;
+                $p.for_aovs(aovs);
+                $build
+            },
+        }
+    };
 }
 
 /// Every method, in the order `--help` lists them.
 pub const METHODS: &[MethodEntry] = &[
-    MethodEntry {
-        name: "gather",
-        summary: "Ray-traced final gathering (SPEC §3.1)",
-        parameters: &["rays", "weighting", "rounds", "ao_radius", "backend"],
-        build: |c| {
-            let gather = c.gather()?.with_rounds(c.rounds.unwrap_or(1))?;
-            Ok(Box::new(
-                gather.with_ao_radius(c.ao_radius)?.with_backend(c.backend),
-            ))
-        },
-    },
-    MethodEntry {
-        name: "adaptive",
-        summary: "Final gathering in rounds until H's relative standard error is below --tolerance",
-        parameters: &["weighting", "tolerance", "min_rays", "max_rays", "ao_radius"],
-        build: |c| {
-            let adaptive = Adaptive::new(c.weighting, c.tolerance, c.min_rays, c.max_rays)?;
-            Ok(Box::new(adaptive.with_ao_radius(c.ao_radius)?))
-        },
-    },
-    MethodEntry {
-        name: "cubemap",
-        summary: "Hemicube rasterisation, looked up with gather's directions (SPEC §3.2)",
-        parameters: &["rays", "weighting", "cube_res", "backend"],
-        build: |c| Ok(Box::new(c.cubemap()?)),
-    },
-    MethodEntry {
-        name: "photon1",
-        summary: "Photon map, method I: harmonic mean of the gathered photons' own distances (SPEC §3.3)",
-        parameters: PHOTON_PARAMETERS,
-        build: |c| Ok(Box::new(c.photon_estimator(PhotonMethod::StoredDistance)?)),
-    },
-    MethodEntry {
-        name: "photon2",
-        summary: "Photon map, method II: distances from the pixel to the photons' next hits (SPEC §3.3)",
-        parameters: PHOTON_PARAMETERS,
-        build: |c| Ok(Box::new(c.photon_estimator(PhotonMethod::NextHitPoint)?)),
-    },
+    method!(
+        "gather",
+        "Ray-traced final gathering (SPEC §3.1)",
+        |p: GatherParams| Ok(Box::new(p.build()?))
+    ),
+    method!(
+        "adaptive",
+        "Final gathering in rounds until H's relative standard error is below --tolerance",
+        |p: AdaptiveParams| Ok(Box::new(p.build()?))
+    ),
+    method!(
+        "cubemap",
+        "Hemicube rasterisation, looked up with gather's directions (SPEC §3.2)",
+        |p: CubemapParams| Ok(Box::new(p.build()?))
+    ),
+    method!(
+        "photon1",
+        "Photon map, method I: harmonic mean of the gathered photons' own distances (SPEC §3.3)",
+        |p: PhotonParams| Ok(Box::new(PhotonEstimator::new(PhotonMethod::StoredDistance, p)?))
+    ),
+    method!(
+        "photon2",
+        "Photon map, method II: distances from the pixel to the photons' next hits (SPEC §3.3)",
+        |p: PhotonParams| Ok(Box::new(PhotonEstimator::new(PhotonMethod::NextHitPoint, p)?))
+    ),
 ];
 
-const PHOTON_PARAMETERS: &[&str] = &[
-    "photon_map",
-    "photons",
-    "gather",
-    "source",
-    "max_bounces",
-    "absorption",
-    "max_radius",
-];
+impl MethodEntry {
+    /// The method's parameters with their defaults, by name (`null`: none, or worked out at
+    /// render time).
+    pub fn defaults(&self) -> Map<String, Value> {
+        (self.defaults)()
+    }
+
+    /// The names of the method's parameters, in its struct's order.
+    pub fn parameters(&self) -> Vec<String> {
+        self.defaults().keys().cloned().collect()
+    }
+
+    /// Whether the method reads parameter `name`.
+    pub fn reads(&self, name: &str) -> bool {
+        self.defaults().contains_key(name)
+    }
+
+    /// The estimator with `params` (any subset of [`MethodEntry::parameters`]; the others
+    /// keep their defaults), for an image with `aovs`. A name the method does not read, or a
+    /// value of the wrong type, is an [`Error::Parameter`] that names it.
+    pub fn build(&self, params: &Map<String, Value>, aovs: &[Aov]) -> Result<Box<dyn Estimator>> {
+        (self.from_object)(params, aovs)
+    }
+
+    /// The estimator with the method flags of a command line that [`flags`] made, for an image
+    /// with `aovs`. A flag given on the command line that this method does not read (`--rays`
+    /// with `photon2`) is refused by name.
+    #[cfg(feature = "cli")]
+    pub fn build_from_flags(&self, matches: &clap::ArgMatches, aovs: &[Aov]) -> Result<Box<dyn Estimator>> {
+        let own = (self.flags)(clap::Command::new(self.name));
+        let own_ids: Vec<&clap::Id> = own.get_arguments().map(|a| a.get_id()).collect();
+        let spell = |arg: &clap::Arg| format!("--{}", arg.get_long().unwrap_or(arg.get_id().as_str()));
+        let unread: Vec<String> = every_flag()
+            .iter()
+            .filter(|(arg, _)| !own_ids.contains(&arg.get_id()))
+            .filter(|(arg, _)| {
+                matches.value_source(arg.get_id().as_str()) == Some(clap::parser::ValueSource::CommandLine)
+            })
+            .map(|(arg, _)| spell(arg))
+            .collect();
+        if !unread.is_empty() {
+            let reads: Vec<String> = own.get_arguments().map(spell).collect();
+            let message = format!(
+                "{} does not read {} (its flags: {})",
+                self.name,
+                unread.join(", "),
+                reads.join(", ")
+            );
+            return Err(Error::invalid("method", message));
+        }
+        (self.from_flags)(matches, aovs)
+    }
+}
+
+/// Every method's flags, each once (in registry order), with the methods that read it.
+#[cfg(feature = "cli")]
+fn every_flag() -> Vec<(clap::Arg, Vec<&'static str>)> {
+    let mut flags: Vec<(clap::Arg, Vec<&'static str>)> = vec![];
+    for entry in METHODS {
+        for arg in (entry.flags)(clap::Command::new(entry.name)).get_arguments() {
+            match flags.iter_mut().find(|(a, _)| a.get_id() == arg.get_id()) {
+                Some((_, readers)) => readers.push(entry.name),
+                None => flags.push((arg.clone(), vec![entry.name])),
+            }
+        }
+    }
+    flags
+}
+
+/// `cmd` with every method's flags, each once; a flag's help ends with the methods that read
+/// it. [`MethodEntry::build_from_flags`] takes the matches.
+#[cfg(feature = "cli")]
+pub fn flags(cmd: clap::Command) -> clap::Command {
+    every_flag().into_iter().fold(cmd, |cmd, (arg, readers)| {
+        let help = arg.get_help().map(|h| h.to_string()).unwrap_or_default();
+        let help = format!("{help} [--method {}]", readers.join(", "));
+        // Listed where they are added, after the command's own flags declared before them.
+        cmd.arg(arg.help(help).display_order(None))
+    })
+}
 
 /// The method called `name`.
 pub fn method(name: &str) -> Result<&'static MethodEntry> {
@@ -246,9 +178,60 @@ pub fn method(name: &str) -> Result<&'static MethodEntry> {
     })
 }
 
-/// Builds method `name` from `config`.
-pub fn build(name: &str, config: &MethodConfig) -> Result<Box<dyn Estimator>> {
-    (method(name)?.build)(config)
+/// Method `name` with `params` (a method's parameter struct, or any value that serialises to
+/// an object naming some of its parameters, such as `serde_json::json!({"rays": 16})`), for
+/// an image with `aovs`: see [`MethodEntry::build`].
+pub fn build(name: &str, params: &impl Serialize, aovs: &[Aov]) -> Result<Box<dyn Estimator>> {
+    method(name)?.build(&object(params)?, aovs)
+}
+
+/// `params` as a JSON object.
+pub fn object(params: &impl Serialize) -> Result<Map<String, Value>> {
+    match serde_json::to_value(params) {
+        Ok(Value::Object(map)) => Ok(map),
+        Ok(Value::Null) => Ok(Map::new()),
+        Ok(other) => Err(Error::parameter(format!(
+            "method parameters must be named, not {other}"
+        ))),
+        Err(e) => Err(Error::parameter(format!("method parameters: {e}"))),
+    }
+}
+
+/// `P`'s defaults as a JSON object.
+fn defaults<P: MethodParams>() -> Map<String, Value> {
+    match serde_json::to_value(P::default()) {
+        Ok(Value::Object(map)) => map,
+        _ => unreachable!("a parameter struct serialises to an object"),
+    }
+}
+
+/// `object` as method `name`'s parameters: each key is checked alone first, so that an
+/// unknown name or a bad value is an error that names it.
+fn from_object<P: MethodParams>(name: &str, object: &Map<String, Value>) -> Result<P> {
+    let defaults = defaults::<P>();
+    for (key, value) in object {
+        let alone = Value::Object(Map::from_iter([(key.clone(), value.clone())]));
+        if let Err(e) = serde_json::from_value::<P>(alone) {
+            let known: Vec<&str> = defaults.keys().map(String::as_str).collect();
+            let message = if defaults.contains_key(key) || !e.to_string().starts_with("unknown field") {
+                format!("{key}: {e}")
+            } else {
+                format!(
+                    "unknown parameter '{key}' for method {name} (its parameters: {})",
+                    known.join(", ")
+                )
+            };
+            return Err(Error::parameter(message));
+        }
+    }
+    serde_json::from_value(Value::Object(object.clone()))
+        .map_err(|e| Error::parameter(format!("{name}: {e}")))
+}
+
+/// `P` from the flags in `matches`.
+#[cfg(feature = "cli")]
+fn from_flags<P: MethodParams>(matches: &clap::ArgMatches) -> Result<P> {
+    P::from_arg_matches(matches).map_err(|e| Error::parameter(e.to_string()))
 }
 
 #[cfg(test)]
@@ -258,14 +241,14 @@ mod tests {
     #[test]
     fn every_method_builds_with_the_defaults_and_reports_its_name() {
         for entry in METHODS {
-            let estimator = (entry.build)(&MethodConfig::default()).unwrap();
+            let estimator = entry.build(&Map::new(), &[]).unwrap();
             assert_eq!(estimator.method(), entry.name);
         }
     }
 
     #[test]
     fn an_unknown_method_is_a_bad_parameter_named_method() {
-        let err = build("raymarch", &MethodConfig::default()).err().unwrap();
+        let err = build("raymarch", &Map::new(), &[]).err().unwrap();
         assert!(matches!(
             err,
             Error::Parameter {
@@ -273,5 +256,88 @@ mod tests {
                 ..
             }
         ));
+    }
+
+    #[test]
+    fn a_parameter_another_method_reads_is_refused_by_name() {
+        let err = build("photon2", &serde_json::json!({"rays": 16}), &[])
+            .err()
+            .unwrap();
+        let message = err.to_string();
+        assert!(
+            message.contains("unknown parameter 'rays' for method photon2"),
+            "{message}"
+        );
+        assert!(message.contains("photons"), "{message}");
+        let err = build("gather", &serde_json::json!({"rays": "many"}), &[])
+            .err()
+            .unwrap();
+        assert!(err.to_string().contains("rays: invalid type"), "{err}");
+    }
+
+    #[test]
+    fn an_alias_is_read_as_its_parameter() {
+        let new = build("photon1", &serde_json::json!({"nearest": 32}), &[]).unwrap();
+        let old = build("photon1", &serde_json::json!({"gather": 32}), &[]).unwrap();
+        assert_eq!(new.parameters(), old.parameters());
+        assert_eq!(new.parameters().photon.unwrap().gather, 32);
+    }
+
+    #[test]
+    fn a_parameter_two_methods_read_has_one_type_and_default() {
+        let mut seen: Vec<(String, Value, &str)> = vec![];
+        for entry in METHODS {
+            for (key, value) in entry.defaults() {
+                match seen.iter().find(|(k, _, _)| *k == key) {
+                    Some((_, first, by)) => assert_eq!(
+                        first, &value,
+                        "{key}: {by} and {} differ in its default",
+                        entry.name
+                    ),
+                    None => seen.push((key, value, entry.name)),
+                }
+            }
+        }
+        assert!(seen.iter().any(|(k, _, _)| k == "rays"));
+    }
+
+    #[cfg(feature = "cli")]
+    #[test]
+    fn every_method_builds_from_the_flags_and_refuses_another_methods_flags() {
+        let command = || flags(clap::Command::new("render").arg(clap::Arg::new("method").long("method")));
+        command().debug_assert();
+        for entry in METHODS {
+            let matches = command().get_matches_from(["render"]);
+            let estimator = entry.build_from_flags(&matches, &[]).unwrap();
+            let defaults = entry.build(&Map::new(), &[]).unwrap();
+            assert_eq!(estimator.parameters(), defaults.parameters(), "{}", entry.name);
+        }
+        let matches = command().get_matches_from(["render", "--rays", "16", "--photons", "9"]);
+        let err = method("photon2")
+            .unwrap()
+            .build_from_flags(&matches, &[])
+            .err()
+            .unwrap();
+        assert!(
+            err.to_string()
+                .contains("photon2 does not read --rays (its flags:"),
+            "{err}"
+        );
+        let err = method("gather")
+            .unwrap()
+            .build_from_flags(&matches, &[])
+            .err()
+            .unwrap();
+        assert!(
+            err.to_string().contains("gather does not read --photons"),
+            "{err}"
+        );
+        let matches = command().get_matches_from(["render", "--rays", "16", "--cube-res", "8"]);
+        let cubemap = method("cubemap")
+            .unwrap()
+            .build_from_flags(&matches, &[])
+            .unwrap();
+        assert_eq!(cubemap.parameters().rays, Some(16));
+        assert_eq!(cubemap.parameters().cubemap.unwrap().cube_res, 8);
     }
 }

@@ -8,7 +8,7 @@ use super::plot::{log_log, Series};
 use super::rays::reference;
 use super::{Runner, Section, Table};
 use crate::error::Result;
-use crate::estimators::{Aov, MethodConfig};
+use crate::estimators::{AdaptiveParams, Aov, GatherParams};
 use crate::image::picture::{encode_png, false_colour};
 use crate::image::{write_atomically, HmdImage};
 use crate::metrics::f_diff;
@@ -44,12 +44,12 @@ fn relative_error_p95(reference: &HmdImage, image: &HmdImage) -> f64 {
 }
 
 /// The configuration of adaptive at `tolerance`, up to the preset's largest fixed N.
-fn adaptive_config(runner: &Runner, tolerance: f32) -> MethodConfig {
-    MethodConfig {
+fn adaptive_config(runner: &Runner, tolerance: f32) -> AdaptiveParams {
+    AdaptiveParams {
         tolerance,
         min_rays: MIN_RAYS,
         max_rays: *runner.params.rays.last().expect("a ray sweep"),
-        ..MethodConfig::default()
+        ..AdaptiveParams::default()
     }
 }
 
@@ -76,9 +76,9 @@ pub fn adaptive(runner: &Runner) -> Result<Section> {
         |rays_cast: Option<u64>, pixels: usize| rays_cast.unwrap_or(0) as f64 / pixels.max(1) as f64;
     let mut fixed = vec![];
     for &rays in &p.rays {
-        let config = MethodConfig {
+        let config = GatherParams {
             rays,
-            ..MethodConfig::default()
+            ..GatherParams::default()
         };
         let (image, report) = runner.method_image("gather", &config, 1)?;
         let surface = (report.width * report.height) as usize - report.background_pixels;

@@ -27,8 +27,9 @@ use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use crate::accel::Kernel;
 use crate::error::{Error, Result};
-use crate::estimators::{registry, Aov, AovImage, Backend, Estimator, MethodConfig};
+use crate::estimators::{registry, Aov, AovImage, Backend, CubemapParams, Estimator};
 use crate::image::{exr, write_atomically, HmdImage};
 use crate::progress::{Progress, Silent};
 use crate::render::{render, RenderOptions};
@@ -245,6 +246,8 @@ pub struct Runner<'a> {
     shard: Option<ShardRun>,
     /// Where gather and the cube map run (every image's configuration gets it).
     backend: Backend,
+    /// The ray-casting kernel of every render (never changes an image).
+    kernel: Kernel,
     /// Set for `experiment --plan`: calibrate instead of render.
     plan: Option<PlanRun>,
     /// The plan a `--plan` run made.
@@ -303,6 +306,7 @@ impl<'a> Runner<'a> {
             cache: out.join("cache"),
             shard: None,
             backend: Backend::Auto,
+            kernel: Kernel::best(),
             plan: None,
             planned: None,
             timings: vec![],
@@ -357,6 +361,12 @@ impl<'a> Runner<'a> {
     /// part of the image cache's key: shards and the run that assembles them must agree.
     pub fn with_backend(self, backend: Backend) -> Self {
         Runner { backend, ..self }
+    }
+
+    /// This runner casting rays with `kernel` (default [`Kernel::best`]; images do not
+    /// depend on it).
+    pub fn with_kernel(self, kernel: Kernel) -> Self {
+        Runner { kernel, ..self }
     }
 
     /// This runner rendering images of at least `rays` rays in parts (default [`PART_RAYS`]):
@@ -474,15 +484,16 @@ impl<'a> Runner<'a> {
         plan::comparison(&self.earlier_plan()?, &self.timings)
     }
 
-    /// The image method `method` (a registry name) renders with `config` and `seed`: see
-    /// [`Runner::image`].
+    /// The image method `method` (a registry name) renders with `params` (its parameter
+    /// struct, or an object naming some of them) and `seed`, on the runner's backend where the
+    /// method has one: see [`Runner::image`].
     pub fn method_image(
         &self,
         method: &str,
-        config: &MethodConfig,
+        params: &impl serde::Serialize,
         seed: u64,
     ) -> Result<(HmdImage, RenderReport)> {
-        let (image, report, _) = self.method_image_with(method, config, seed, &[])?;
+        let (image, report, _) = self.method_image_with(method, params, seed, &[])?;
         Ok((image, report))
     }
 
@@ -491,15 +502,17 @@ impl<'a> Runner<'a> {
     pub fn method_image_with(
         &self,
         method: &str,
-        config: &MethodConfig,
+        params: &impl serde::Serialize,
         seed: u64,
         aovs: &[Aov],
     ) -> Result<(HmdImage, RenderReport, Vec<HmdImage>)> {
-        let config = MethodConfig {
-            backend: self.backend,
-            ..config.clone()
-        };
-        self.image_with(registry::build(method, &config)?.as_ref(), seed, aovs)
+        let entry = registry::method(method)?;
+        let mut params = registry::object(params)?;
+        if entry.reads("backend") {
+            let backend = serde_json::to_value(self.backend).expect("a backend serialises");
+            params.insert("backend".into(), backend);
+        }
+        self.image_with(entry.build(&params, aovs)?.as_ref(), seed, aovs)
     }
 
     /// The image `estimator` renders at the preset's size with `seed`, from the cache when
@@ -546,6 +559,7 @@ impl<'a> Runner<'a> {
             height: size,
             seed,
             aovs: aovs.to_vec(),
+            kernel: self.kernel,
             ..RenderOptions::default()
         };
         let rendered = self
@@ -727,18 +741,18 @@ impl<'a> Runner<'a> {
     /// once for all of them, each image bit for bit its own render's), so that asking for
     /// each afterwards finds it cached; in a plan, calibrates that pass. Only on the CPU
     /// backend, and not in a shard (there each image is rendered alone, when asked for).
-    pub fn cubemap_sweep(&self, configs: &[MethodConfig], seed: u64) -> Result<()> {
+    pub fn cubemap_sweep(&self, configs: &[CubemapParams], seed: u64) -> Result<()> {
         crate::interrupt::check()?;
         if self.shard.is_some() {
             return Ok(());
         }
         let mut cubemaps = vec![];
         for config in configs {
-            let cubemap = MethodConfig {
+            let cubemap = CubemapParams {
                 backend: self.backend,
                 ..config.clone()
             }
-            .cubemap()?;
+            .build()?;
             let stem = self.stem(&cubemap, seed, &[]);
             let json = self.cache.join(format!("{stem}.json"));
             let known = self
@@ -757,6 +771,7 @@ impl<'a> Runner<'a> {
             width: size,
             height: size,
             seed,
+            kernel: self.kernel,
             ..RenderOptions::default()
         };
         let group: Vec<&crate::estimators::Cubemap> = cubemaps.iter().map(|(c, _)| c).collect();
@@ -797,6 +812,7 @@ impl<'a> Runner<'a> {
             height: size,
             seed,
             shard: Some(shard),
+            kernel: self.kernel,
             ..RenderOptions::default()
         };
         let start = Instant::now();
@@ -896,6 +912,7 @@ impl<'a> Runner<'a> {
                     seed,
                     aovs: aovs.to_vec(),
                     shard: Some(shard),
+                    kernel: self.kernel,
                     ..RenderOptions::default()
                 };
                 let start = Instant::now();

@@ -12,9 +12,9 @@ use super::{Runner, Section, Table};
 use crate::accel::{Accel, BuildQuality};
 use crate::error::Result;
 use crate::estimators::photon::{
-    trace_photons, PathRules, PhotonMap, PhotonMethod, PhotonSource, SourceKind, DEFAULT_ABSORPTION,
+    trace_photons, PathRules, PhotonMap, PhotonMethod, PhotonParams, PhotonSource, SourceKind,
+    DEFAULT_ABSORPTION,
 };
-use crate::estimators::MethodConfig;
 use crate::image::picture::grey;
 use crate::metrics::f_diff;
 
@@ -31,13 +31,13 @@ const METHODS: [(PhotonMethod, &str); 2] = [
 
 /// A photon method's configuration: `photons`, `k` gathered, `source`, `max_bounces`,
 /// others default.
-fn photon_config(photons: usize, k: usize, source: SourceKind, max_bounces: u32) -> MethodConfig {
-    MethodConfig {
+fn photon_config(photons: usize, k: usize, source: SourceKind, max_bounces: u32) -> PhotonParams {
+    PhotonParams {
         photons,
-        gather: k,
+        nearest: k,
         source,
         max_bounces,
-        ..MethodConfig::default()
+        ..PhotonParams::default()
     }
 }
 

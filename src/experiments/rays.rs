@@ -6,7 +6,7 @@ use super::paper;
 use super::plot::{log_log, Series};
 use super::{Runner, Section, Table, REFERENCE_SEED};
 use crate::error::Result;
-use crate::estimators::MethodConfig;
+use crate::estimators::{CubemapParams, GatherParams};
 use crate::image::picture::grey;
 use crate::image::HmdImage;
 use crate::metrics::{difference_picture, f_diff};
@@ -40,34 +40,41 @@ impl RaySweep {
     }
 }
 
-/// The configuration of `gather` and the cube map with `rays` rays (on the runner's
-/// backend).
-fn rays_config(runner: &Runner, rays: u32) -> MethodConfig {
-    MethodConfig {
+/// `gather` with `rays` rays (on the runner's backend).
+fn gather_params(rays: u32) -> GatherParams {
+    GatherParams {
+        rays,
+        ..GatherParams::default()
+    }
+}
+
+/// The cube map with `rays` rays at the preset's resolution (on the runner's backend).
+fn cubemap_params(runner: &Runner, rays: u32) -> CubemapParams {
+    CubemapParams {
         rays,
         cube_res: runner.params.cube_res,
-        ..MethodConfig::default()
+        ..CubemapParams::default()
     }
 }
 
 /// The reference image: gather with the preset's reference ray count, its own seed.
 pub(super) fn reference(runner: &Runner) -> Result<HmdImage> {
-    let config = rays_config(runner, runner.params.reference_rays);
-    Ok(runner.method_image("gather", &config, REFERENCE_SEED)?.0)
+    let params = gather_params(runner.params.reference_rays);
+    Ok(runner.method_image("gather", &params, REFERENCE_SEED)?.0)
 }
 
 /// The cube maps of the preset's resolution that the ray studies of this run need: Table 1's,
 /// one per ray count, and, where the run includes Fig. 9 at that resolution, Fig. 9's at the
 /// reference's ray count. They share each pixel's hemicube: [`Runner::cubemap_sweep`] makes
 /// them in one pass.
-fn cubemap_group(runner: &Runner) -> Vec<MethodConfig> {
+fn cubemap_group(runner: &Runner) -> Vec<CubemapParams> {
     let p = &runner.params;
-    let mut group: Vec<MethodConfig> = p.rays.iter().map(|&rays| rays_config(runner, rays)).collect();
+    let mut group: Vec<CubemapParams> = p.rays.iter().map(|&rays| cubemap_params(runner, rays)).collect();
     let fig9_res = paper::CPU_VS_GPU_AT_65536
         .iter()
         .any(|c| c.cube_res == p.cube_res);
     if runner.runs("fig9") && fig9_res {
-        group.push(rays_config(runner, p.reference_rays));
+        group.push(cubemap_params(runner, p.reference_rays));
     }
     group
 }
@@ -80,9 +87,8 @@ fn ray_sweep(runner: &Runner) -> Result<RaySweep> {
     let (mut rows, mut gathered, mut excluded) = (vec![], vec![], 0);
     let mut cubemap_backend = String::new();
     for &rays in &runner.params.rays {
-        let config = rays_config(runner, rays);
-        let (g, g_report) = runner.method_image("gather", &config, 1)?;
-        let (c, c_report) = runner.method_image("cubemap", &config, 1)?;
+        let (g, g_report) = runner.method_image("gather", &gather_params(rays), 1)?;
+        let (c, c_report) = runner.method_image("cubemap", &cubemap_params(runner, rays), 1)?;
         cubemap_backend = backend_of(&c_report);
         let (fg, fc) = (f_diff(&reference, &g, l_diag)?, f_diff(&reference, &c, l_diag)?);
         excluded = excluded.max(fg.excluded).max(fc.excluded);
@@ -319,7 +325,7 @@ fn ray_grids(runner: &Runner, sweep: &RaySweep) -> Result<Vec<std::path::PathBuf
 /// ray count, with difference pictures.
 pub fn fig9(runner: &Runner) -> Result<Section> {
     let p = &runner.params;
-    let config = rays_config(runner, p.reference_rays);
+    let config = cubemap_params(runner, p.reference_rays);
     // The paper's Fig. 9 compares CPU final gathering with the reference's ray count against
     // the cube map: that gather image *is* the reference, so it is not rendered again.
     let g = reference(runner)?;
@@ -342,7 +348,7 @@ pub fn fig9(runner: &Runner) -> Result<Section> {
     let mut notes = vec![];
     for published in &paper::CPU_VS_GPU_AT_65536 {
         let r = published.cube_res;
-        let config = MethodConfig {
+        let config = CubemapParams {
             cube_res: r,
             ..config.clone()
         };

@@ -68,7 +68,12 @@ pub const TINY: [&str; 4] = ["--size", "8x8", "--rays", "4"];
 /// `render --quiet` at the [`TINY`] size with `extra` arguments.
 pub fn render_args<'a>(extra: &[&'a str]) -> Vec<&'a str> {
     let mut args = vec!["render", "--quiet"];
-    args.extend_from_slice(&TINY);
+    // `--rays` only where the method reads it: another method refuses it.
+    let method = extra.windows(2).find(|w| w[0] == "--method").map(|w| w[1]);
+    match method {
+        None | Some("gather" | "cubemap") => args.extend_from_slice(&TINY),
+        Some(_) => args.extend_from_slice(&TINY[..2]),
+    }
     args.extend_from_slice(extra);
     args
 }

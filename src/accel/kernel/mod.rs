@@ -7,8 +7,9 @@
 //! SSE operand rule written out in the scalar code), so the traversal takes the same path and
 //! finds the same hit whatever kernel runs. `tests/kernels.rs` checks this on millions of
 //! rays. The kernel is chosen once, when the [`super::Accel`] is built: the fastest one the
-//! CPU has, or the one named by the environment variable `HMDIST_KERNEL`
-//! (`scalar`, `avx2`, `avx512`).
+//! CPU has, or the one the caller names (`RenderOptions::kernel`, `Accel::for_work`). The
+//! CLI and Python take it from the environment variable `HMDIST_KERNEL` (`scalar`, `avx2`,
+//! `avx512`) with [`Kernel::from_env`]; the library itself never reads it.
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod avx2;

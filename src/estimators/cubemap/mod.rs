@@ -19,6 +19,7 @@ use crate::error::{Error, Result};
 use crate::gpu::hemicube::HemicubeGpu;
 use crate::progress::Progress;
 use crate::report::{CubemapParameters, Parameters};
+use crate::sampling::Weighting;
 pub use cpu::sweep;
 pub use hemicube::{Face, Hemicube};
 
@@ -26,6 +27,53 @@ pub use hemicube::{Face, Hemicube};
 pub const DEFAULT_CUBE_RES: u32 = 64;
 /// Largest `R` accepted: a 2R × 2R top face must fit a GPU texture comfortably.
 pub const MAX_CUBE_RES: u32 = 1024;
+
+/// `cubemap`'s parameters: the CLI's flags, Python's keywords and the registry's build all
+/// come from this one list.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
+pub struct CubemapParams {
+    /// Gather rays per pixel N: the directions looked up in the hemicube.
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = super::gather::DEFAULT_RAYS))]
+    pub rays: u32,
+    /// Direction weighting over the hemisphere.
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Weighting::Cosine))]
+    pub weighting: Weighting,
+    /// Per-quadrant hemicube resolution R: top face 2R x 2R, sides 2R x R.
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, default_value_t = DEFAULT_CUBE_RES, help_heading = "Cube map")
+    )]
+    pub cube_res: u32,
+    /// Where the hemicubes are built.
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Backend::Auto))]
+    pub backend: Backend,
+}
+
+impl Default for CubemapParams {
+    fn default() -> Self {
+        CubemapParams {
+            rays: super::gather::DEFAULT_RAYS,
+            weighting: Weighting::default(),
+            cube_res: DEFAULT_CUBE_RES,
+            backend: Backend::default(),
+        }
+    }
+}
+
+impl super::params::MethodParams for CubemapParams {}
+
+impl CubemapParams {
+    /// The cube map these parameters name, checked.
+    pub fn build(&self) -> Result<Cubemap> {
+        Cubemap::new(
+            Gather::new(self.rays, self.weighting)?,
+            self.cube_res,
+            self.backend,
+        )
+    }
+}
 
 /// The cube-map estimator: `gather`'s directions looked up in per-pixel hemicubes.
 pub struct Cubemap {

@@ -31,7 +31,7 @@ pub use trace::{trace_photons, PathRules, PhotonSource, PhotonTrace, TracedPhoto
 /// Default stored photons `P` (paper: 130 K … 8.53 M).
 pub const DEFAULT_PHOTONS: usize = 1_000_000;
 /// Default photons gathered per pixel `K` (paper: 64 … 1,024).
-pub const DEFAULT_GATHER: usize = 256;
+pub const DEFAULT_NEAREST: usize = 256;
 /// Default bounce limit (paper: 20 and 80).
 pub const DEFAULT_MAX_BOUNCES: u32 = 20;
 /// Default absorption probability per interaction (paper: 0.2).
@@ -39,32 +39,76 @@ pub const DEFAULT_ABSORPTION: f32 = 0.2;
 /// A gathered photon counts when `n_j · n` is at least this (same surface orientation).
 pub const NORMAL_FILTER_COS: f32 = 0.9;
 
-/// The photon estimators' parameters.
-#[derive(Clone, Copy, Debug)]
+/// The photon estimators' parameters, `photon1`'s and `photon2`'s one list: the CLI's flags
+/// (`--photons`), Python's keywords and the registry's build all come from here.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
 pub struct PhotonParams {
-    /// Stored photons `P`, exactly.
+    /// Gather over this photon map file (from `hmdist photons build`) instead of tracing one.
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_name = "FILE", help_heading = "Photon methods")
+    )]
+    pub photon_map: Option<std::path::PathBuf>,
+    /// Photons stored P, exactly.
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, default_value_t = DEFAULT_PHOTONS, help_heading = "Photon methods")
+    )]
     pub photons: usize,
-    /// Nearest photons gathered per pixel `K`.
-    pub gather: usize,
+    /// Nearest photons gathered per pixel K (`--gather` is its older name).
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_name = "K", alias = "gather", default_value_t = DEFAULT_NEAREST, help_heading = "Photon methods")
+    )]
+    #[serde(alias = "gather")]
+    pub nearest: usize,
     /// Where paths start.
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_enum, default_value_t = SourceKind::Light, help_heading = "Photon methods")
+    )]
     pub source: SourceKind,
-    /// When paths end: bounce limit and absorption.
-    pub rules: PathRules,
-    /// Gather only within this distance of the pixel (`None`: no limit).
+    /// A path ends at this many surface interactions.
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, default_value_t = DEFAULT_MAX_BOUNCES, help_heading = "Photon methods")
+    )]
+    pub max_bounces: u32,
+    /// Probability that a path ends at each interaction.
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, default_value_t = DEFAULT_ABSORPTION, help_heading = "Photon methods")
+    )]
+    pub absorption: f32,
+    /// Gather only within this distance of the pixel [default: no limit].
+    #[cfg_attr(feature = "cli", arg(long, value_name = "R", help_heading = "Photon methods"))]
     pub max_radius: Option<f32>,
 }
 
 impl Default for PhotonParams {
     fn default() -> Self {
         PhotonParams {
+            photon_map: None,
             photons: DEFAULT_PHOTONS,
-            gather: DEFAULT_GATHER,
+            nearest: DEFAULT_NEAREST,
             source: SourceKind::Light,
-            rules: PathRules {
-                max_bounces: DEFAULT_MAX_BOUNCES,
-                absorption: DEFAULT_ABSORPTION,
-            },
+            max_bounces: DEFAULT_MAX_BOUNCES,
+            absorption: DEFAULT_ABSORPTION,
             max_radius: None,
+        }
+    }
+}
+
+impl super::params::MethodParams for PhotonParams {}
+
+impl PhotonParams {
+    /// When paths end: the bounce limit and the absorption.
+    pub fn rules(&self) -> PathRules {
+        PathRules {
+            max_bounces: self.max_bounces,
+            absorption: self.absorption,
         }
     }
 }
@@ -79,18 +123,19 @@ pub struct PhotonEstimator {
 
 impl PhotonEstimator {
     /// Method `method` with `params`, checked: counts at least 1, absorption in [0, 1), a
-    /// positive radius, and a map that fits in the memory available now.
+    /// positive radius, and a map that fits in the memory available now; over the map file
+    /// `params.photon_map` where it names one ([`PhotonEstimator::with_map_file`]).
     pub fn new(method: PhotonMethod, params: PhotonParams) -> Result<Self> {
         if params.photons == 0 {
             return Err(Error::invalid("photons", "must be at least 1, not 0"));
         }
-        if params.gather == 0 {
-            return Err(Error::invalid("gather", "must be at least 1, not 0"));
+        if params.nearest == 0 {
+            return Err(Error::invalid("nearest", "must be at least 1, not 0"));
         }
-        if params.rules.max_bounces == 0 {
+        if params.max_bounces == 0 {
             return Err(Error::invalid("max_bounces", "must be at least 1, not 0"));
         }
-        let a = params.rules.absorption;
+        let a = params.absorption;
         if !(0.0..1.0).contains(&a) {
             return Err(Error::invalid(
                 "absorption",
@@ -99,11 +144,19 @@ impl PhotonEstimator {
         }
         Error::check_positive("max_radius", params.max_radius)?;
         check_memory(method, params.photons)?;
-        Ok(PhotonEstimator {
+        let map_file = params.photon_map.clone();
+        let estimator = PhotonEstimator {
             method,
             params,
             prebuilt: None,
-        })
+        };
+        match map_file {
+            Some(path) => {
+                let bytes = std::fs::read(&path).map_err(|e| Error::io(&path, "read", e))?;
+                estimator.with_map_file(&bytes, &path)
+            }
+            None => Ok(estimator),
+        }
     }
 
     fn source(&self, context: &EstimateContext, gbuffer: &GBuffer) -> Result<PhotonSource> {
@@ -142,8 +195,8 @@ impl PhotonEstimator {
             self.method.name(),
             p.photons,
             p.source.name(),
-            p.rules.max_bounces,
-            p.rules.absorption.to_bits(),
+            p.max_bounces,
+            p.absorption.to_bits(),
             bvh.name()
         );
         crate::scene::stable_hash(key.as_bytes())
@@ -162,7 +215,7 @@ impl PhotonEstimator {
         in_pool(options.threads, || {
             let pixels = options.width as u64 * options.height as u64;
             let rays = pixels + self.expected_rays(pixels);
-            let kernel = crate::accel::Kernel::from_env()?;
+            let kernel = options.kernel;
             let (accel, bvh) = Accel::for_work(&scene.mesh, options.bvh_quality, rays, kernel)?;
             let source = self.source_for(scene, (options.width, options.height))?;
             let (map, header, _) = self.trace_and_index(&accel, &source, options.seed, progress)?;
@@ -208,7 +261,7 @@ impl PhotonEstimator {
             let before = done.swap(stored as u64, Ordering::Relaxed);
             progress.advance(stored as u64 - before);
         };
-        let traced = trace_photons(accel, source, p.rules, p.photons, seed, &report)?;
+        let traced = trace_photons(accel, source, p.rules(), p.photons, seed, &report)?;
         progress.finish();
         let photon_trace = start.elapsed().as_secs_f64();
         let start = Instant::now();
@@ -257,10 +310,10 @@ impl Estimator for PhotonEstimator {
             rays: None,
             photon: Some(PhotonParameters {
                 photons: p.photons,
-                gather: p.gather,
+                gather: p.nearest,
                 source: p.source,
-                max_bounces: p.rules.max_bounces,
-                absorption: p.rules.absorption,
+                max_bounces: p.max_bounces,
+                absorption: p.absorption,
                 max_radius: p.max_radius,
                 normal_filter_cos: NORMAL_FILTER_COS,
             }),
@@ -308,7 +361,7 @@ impl Estimator for PhotonEstimator {
             estimator: self,
             context,
             map,
-            k: NonZero::new(self.params.gather).expect("validated: gather ≥ 1"),
+            k: NonZero::new(self.params.nearest).expect("validated: nearest ≥ 1"),
             photons_stored: header.photons_stored as usize,
             paths_traced: header.paths_traced,
             escaped_photons: header.escaped_photons,
