@@ -10,7 +10,7 @@
 
 use super::gather::PointGather;
 use super::{
-    Aov, AovSample, EstimateContext, Estimator, GBuffer, PixelPass, PixelWork, PixelWorker, Tally, Work,
+    Aov, AovSample, EstimateContext, Estimator, GBuffer, PixelJob, PixelPass, PixelWorker, Prepared, Tally,
 };
 use crate::accel::GatherStart;
 use crate::accel::Hit;
@@ -167,15 +167,15 @@ impl Estimator for Adaptive {
         context: &'a EstimateContext<'a>,
         _: &'a GBuffer,
         _: &dyn Progress,
-    ) -> Result<Work<'a>> {
+    ) -> Result<Prepared<'a>> {
         if context.aovs.contains(&Aov::Ao) && self.ao_radius.is_none() {
             return Err(Error::invalid(
                 "ao_radius",
                 "is needed for the ao AOV of adaptive",
             ));
         }
-        Ok(Work::Pixels {
-            work: Box::new(AdaptivePixels {
+        Ok(Prepared::Pixels {
+            job: Box::new(AdaptivePixels {
                 adaptive: self,
                 context,
             }),
@@ -192,7 +192,7 @@ struct AdaptivePixels<'a> {
     context: &'a EstimateContext<'a>,
 }
 
-impl PixelWork for AdaptivePixels<'_> {
+impl PixelJob for AdaptivePixels<'_> {
     fn label(&self) -> &'static str {
         "adaptive"
     }

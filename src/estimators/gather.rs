@@ -17,8 +17,8 @@
 use glam::Vec3;
 
 use super::{
-    Aov, AovSample, DistanceClamp, EstimateContext, Estimator, GBuffer, HarmonicMean, PixelPass, PixelWork,
-    PixelWorker, Tally, Work,
+    Aov, AovSample, DistanceClamp, EstimateContext, Estimator, GBuffer, HarmonicMean, PixelJob, PixelPass,
+    PixelWorker, Prepared, Tally,
 };
 use crate::accel::{GatherStart, Hit, RayCaster, PACKET};
 use crate::backend::Backend;
@@ -298,7 +298,7 @@ impl Estimator for Gather {
         context: &'a EstimateContext<'a>,
         gbuffer: &'a GBuffer,
         progress: &dyn Progress,
-    ) -> Result<Work<'a>> {
+    ) -> Result<Prepared<'a>> {
         if context.aovs.contains(&Aov::Relerr) && self.rounds < 2 {
             let message = format!(
                 "of {} cannot give the relerr AOV: it needs at least 2",
@@ -310,7 +310,7 @@ impl Estimator for Gather {
         #[cfg(feature = "gpu")]
         if let Some(gpu) = self.gpu(context.accel)? {
             return estimate_on_gpu(&gpu, self, context, gbuffer, ao, progress)
-                .map(|e| Work::Done(Box::new(e)));
+                .map(|e| Prepared::Done(Box::new(e)));
         }
         #[cfg(not(feature = "gpu"))]
         if self.backend.is_gpu() {
@@ -322,8 +322,8 @@ impl Estimator for Gather {
             AoRadius::Median => Some(median_hmd(self, context, gbuffer, progress)?),
             AoRadius::None => None,
         };
-        Ok(Work::Pixels {
-            work: Box::new(GatherPixels {
+        Ok(Prepared::Pixels {
+            job: Box::new(GatherPixels {
                 gather: self,
                 context,
                 ao_radius,
@@ -733,7 +733,7 @@ struct GatherPixels<'a> {
     ao_radius: Option<f32>,
 }
 
-impl PixelWork for GatherPixels<'_> {
+impl PixelJob for GatherPixels<'_> {
     fn label(&self) -> &'static str {
         "gather"
     }

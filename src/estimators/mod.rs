@@ -8,6 +8,11 @@
 //! image at once (the GPU hemicube, which rasterises batches of pixels) returns its finished
 //! [`Estimate`] from `prepare` instead.
 //!
+//! The names, in the order a render meets them: [`Estimator::prepare`] gives a [`Prepared`]
+//! (a [`PixelJob`] over the image's pixels, or the finished [`Estimate`]); the job gives each
+//! thread a [`PixelWorker`], which evaluates one pixel at a time and adds to its [`Tally`];
+//! the driver sums the tallies into a [`PixelPass`] and hands the job's [`Estimate`] back.
+//!
 //! **Adding a sixth estimator** is one new module implementing [`Estimator`] (its pixel in a
 //! [`PixelWorker`]) with its parameter struct ([`MethodParams`]), plus one line in
 //! [`registry::METHODS`]; the CLI's `--method` and flags, Python's keywords, the experiments
@@ -155,13 +160,14 @@ pub struct PixelPass {
     pub seconds: f64,
 }
 
-/// The work of one estimator on one image, from [`Estimator::prepare`].
-pub enum Work<'a> {
-    /// Per-pixel work for the driver's loop, after a preparation that took `phases` and cast
+/// What [`Estimator::prepare`] gives the driver for one image: a job over its pixels, or the
+/// finished estimate.
+pub enum Prepared<'a> {
+    /// A per-pixel job for the driver's loop, after a preparation that took `phases` and cast
     /// `rays` (the photon trace; `None` where nothing was prepared).
     Pixels {
-        /// Evaluates pixels.
-        work: Box<dyn PixelWork + 'a>,
+        /// Evaluates pixels, one [`PixelWorker`] per thread.
+        job: Box<dyn PixelJob + 'a>,
         /// Seconds of the preparation's phases.
         phases: PhaseSeconds,
         /// Rays the preparation cast.
@@ -171,8 +177,9 @@ pub enum Work<'a> {
     Done(Box<Estimate>),
 }
 
-/// An estimator's per-pixel work on one image, shared by the worker threads.
-pub trait PixelWork: Sync {
+/// An estimator's job over the pixels of one image, shared by the threads: each thread asks
+/// it for a [`PixelWorker`] with its own scratch.
+pub trait PixelJob: Sync {
     /// The progress bar's label for the pixel pass.
     fn label(&self) -> &'static str;
 
@@ -191,7 +198,7 @@ pub trait PixelWork: Sync {
     }
 
     /// A worker for one thread, with its own scratch (the CPU cube map's texel cache), and
-    /// the pass's `progress` where [`PixelWork::progress_per_pixel`] is above 1.
+    /// the pass's `progress` where [`PixelJob::progress_per_pixel`] is above 1.
     fn worker<'w>(&'w self, progress: &'w dyn Progress) -> Box<dyn PixelWorker + 'w>;
 
     /// The method-specific figures of the report, once every pixel is done.
@@ -229,5 +236,5 @@ pub trait Estimator: Sync {
         context: &'a EstimateContext<'a>,
         gbuffer: &'a GBuffer,
         progress: &dyn Progress,
-    ) -> Result<Work<'a>>;
+    ) -> Result<Prepared<'a>>;
 }

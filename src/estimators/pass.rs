@@ -8,8 +8,8 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::{
-    Aov, AovImage, AovSample, Estimate, EstimateContext, Estimator, GBuffer, PixelPass, PixelWork,
-    PixelWorker, RayCount, Tally, Work,
+    Aov, AovImage, AovSample, Estimate, EstimateContext, Estimator, GBuffer, PixelJob, PixelPass,
+    PixelWorker, Prepared, RayCount, Tally,
 };
 use crate::accel::Hit;
 use crate::error::Result;
@@ -24,12 +24,12 @@ pub fn estimate(
     progress: &dyn Progress,
 ) -> Result<Estimate> {
     Ok(match estimator.prepare(context, gbuffer, progress)? {
-        Work::Done(estimate) => *estimate,
-        Work::Pixels { work, phases, rays } => {
-            let (hmd, aovs, pass) = pixel_pass(work.as_ref(), gbuffer, context.aovs, progress)?;
+        Prepared::Done(estimate) => *estimate,
+        Prepared::Pixels { job, phases, rays } => {
+            let (hmd, aovs, pass) = pixel_pass(job.as_ref(), gbuffer, context.aovs, progress)?;
             let mut phases = phases;
-            work.record_phase(&mut phases, pass.seconds);
-            let pixel_rays = work.casts_rays().then_some(RayCount {
+            job.record_phase(&mut phases, pass.seconds);
+            let pixel_rays = job.casts_rays().then_some(RayCount {
                 cast: pass.tally.rays,
                 escaped: pass.tally.escaped,
                 seconds: pass.seconds,
@@ -39,7 +39,7 @@ pub fn estimate(
                 aovs,
                 rays: rays.or(pixel_rays),
                 phases,
-                details: work.details(&pass),
+                details: job.details(&pass),
             }
         }
     })
@@ -47,10 +47,10 @@ pub fn estimate(
 
 /// The driver's loop over the estimator's pixels: rows in parallel, one worker (with its
 /// scratch) per rayon job, NaN for background, holes counted, the AOVs in `aovs` kept; progress
-/// in surface pixels, or in [`PixelWork::progress_per_pixel`] steps each. The image does not depend on how rows are split among threads.
+/// in surface pixels, or in [`PixelJob::progress_per_pixel`] steps each. The image does not depend on how rows are split among threads.
 /// [`Error::Interrupted`] if [`crate::interrupt::request`] was called before it finished.
 pub(crate) fn pixel_pass(
-    work: &dyn PixelWork,
+    work: &dyn PixelJob,
     gbuffer: &GBuffer,
     aovs: &[Aov],
     progress: &dyn Progress,

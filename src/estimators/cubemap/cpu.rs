@@ -26,7 +26,7 @@ use super::{Cubemap, Hemicube};
 use crate::accel::{Hit, RayCaster, PACKET};
 use crate::error::Result;
 use crate::estimators::{
-    AovSample, Estimate, EstimateContext, GBuffer, Gather, HarmonicMean, PixelPass, PixelWork, PixelWorker,
+    AovSample, Estimate, EstimateContext, GBuffer, Gather, HarmonicMean, PixelJob, PixelPass, PixelWorker,
     RayCount, Tally,
 };
 use crate::progress::Progress;
@@ -39,7 +39,7 @@ pub(super) struct CpuPixels<'a> {
     pub context: &'a EstimateContext<'a>,
 }
 
-impl PixelWork for CpuPixels<'_> {
+impl PixelJob for CpuPixels<'_> {
     fn label(&self) -> &'static str {
         "cube maps"
     }

@@ -12,7 +12,7 @@
 mod cpu;
 pub mod hemicube;
 
-use super::{EstimateContext, Estimator, GBuffer, Gather, Work};
+use super::{EstimateContext, Estimator, GBuffer, Gather, Prepared};
 pub use crate::backend::Backend;
 use crate::error::{Error, Result};
 #[cfg(feature = "gpu")]
@@ -158,18 +158,19 @@ impl Estimator for Cubemap {
         context: &'a EstimateContext<'a>,
         gbuffer: &'a GBuffer,
         progress: &dyn Progress,
-    ) -> Result<Work<'a>> {
+    ) -> Result<Prepared<'a>> {
         #[cfg(feature = "gpu")]
         if let Some(gpu) = self.gpu()? {
-            return estimate_on_gpu(&gpu, self, context, gbuffer, progress).map(|e| Work::Done(Box::new(e)));
+            return estimate_on_gpu(&gpu, self, context, gbuffer, progress)
+                .map(|e| Prepared::Done(Box::new(e)));
         }
         #[cfg(not(feature = "gpu"))]
         if self.backend.is_gpu() {
             return Err(Backend::unavailable());
         }
         let _ = (gbuffer, progress);
-        Ok(Work::Pixels {
-            work: Box::new(cpu::CpuPixels {
+        Ok(Prepared::Pixels {
+            job: Box::new(cpu::CpuPixels {
                 cubemap: self,
                 context,
             }),

@@ -14,8 +14,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use super::{
-    AovSample, EstimateContext, Estimator, GBuffer, HarmonicMean, PixelPass, PixelWork, PixelWorker,
-    RayCount, Tally, Work,
+    AovSample, EstimateContext, Estimator, GBuffer, HarmonicMean, PixelJob, PixelPass, PixelWorker, Prepared,
+    RayCount, Tally,
 };
 use crate::accel::Hit;
 use crate::accel::{Accel, BuildQuality};
@@ -327,7 +327,7 @@ impl Estimator for PhotonEstimator {
         context: &'a EstimateContext<'a>,
         gbuffer: &'a GBuffer,
         progress: &dyn Progress,
-    ) -> Result<Work<'a>> {
+    ) -> Result<Prepared<'a>> {
         let (map, header, phases) = match &self.prebuilt {
             Some((map, header)) => {
                 let size = (gbuffer.width, gbuffer.height);
@@ -366,8 +366,8 @@ impl Estimator for PhotonEstimator {
             paths_traced: header.paths_traced,
             escaped_photons: header.escaped_photons,
         };
-        Ok(Work::Pixels {
-            work: Box::new(work),
+        Ok(Prepared::Pixels {
+            job: Box::new(work),
             phases,
             // A prebuilt map's tracing cast its rays elsewhere, once.
             rays: self.prebuilt.is_none().then_some(rays),
@@ -403,7 +403,7 @@ struct PhotonPixels<'a> {
     escaped_photons: u64,
 }
 
-impl PixelWork for PhotonPixels<'_> {
+impl PixelJob for PhotonPixels<'_> {
     fn label(&self) -> &'static str {
         "gather"
     }
