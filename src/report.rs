@@ -5,7 +5,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::sampling::Weighting;
+use crate::sampling::{Sampler, Weighting};
 use crate::scene::{Bounds, Camera, SpotLight};
 
 /// One rendered image's report: the JSON sidecar.
@@ -389,6 +389,10 @@ pub struct GatherParameters {
     /// Independent rounds the rays are cast in (1: one grid); adaptive: the rounds before
     /// its first check.
     pub rounds: u32,
+    /// How the directions fill the hemisphere; absent for the grid (SPEC §3.1), which is
+    /// every report written before the samplers.
+    #[serde(default, skip_serializing_if = "Sampler::is_grid")]
+    pub sampler: Sampler,
 }
 
 /// The hemicube.

@@ -30,6 +30,163 @@ impl Weighting {
     }
 }
 
+/// How a point's gather directions fill the unit square (issue #25): the jittered grid of
+/// SPEC §3.1, or a progressive sequence whose every prefix of `2^k` rays is stratified.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum Sampler {
+    /// A jittered `a × b` grid of all N rays (SPEC §3.1): one ray per stratum.
+    #[default]
+    Grid,
+    /// Owen-scrambled Sobol (0,2) points: every prefix of `2^k` rays has one ray in each
+    /// elementary box of area `2^-k` (each `2^a × 2^b` grid with `a + b = k`), for any N.
+    Sobol,
+}
+
+impl Sampler {
+    /// The name the CLI and the report use.
+    pub fn name(self) -> &'static str {
+        match self {
+            Sampler::Grid => "grid",
+            Sampler::Sobol => "sobol",
+        }
+    }
+
+    /// Whether this is the grid (the report leaves the default out).
+    pub fn is_grid(&self) -> bool {
+        *self == Sampler::Grid
+    }
+}
+
+/// Laine and Karras's hash-based permutation: output bit `k` depends on input bits `0..=k`
+/// only (Burley 2020, "Practical Hash-based Owen Scrambling", with his constants).
+#[inline(always)]
+fn laine_karras(mut x: u32, seed: u32) -> u32 {
+    x = x.wrapping_add(seed);
+    x ^= x.wrapping_mul(0x6c50_b47c);
+    x ^= x.wrapping_mul(0xb82f_1e52);
+    x ^= x.wrapping_mul(0xc7af_e638);
+    x ^= x.wrapping_mul(0x8d22_f6e6);
+    x
+}
+
+/// Owen's nested uniform scramble of a binary fraction `x` (bit 31 first): each bit is
+/// flipped or not by a hash of `seed` and the bits above it, so it keeps every elementary
+/// box whole (Burley 2020).
+#[inline(always)]
+fn owen_scramble(x: u32, seed: u32) -> u32 {
+    laine_karras(x.reverse_bits(), seed).reverse_bits()
+}
+
+/// The second Sobol dimension's generator matrix applied to `i`, bit by bit: the column of
+/// bit `k` is Pascal's triangle mod 2 (`v ← v ⊕ v >> 1` from `v = 2^31`).
+const fn sobol_dim1_slow(i: u32) -> u32 {
+    let (mut y, mut v, mut bits) = (0u32, 1u32 << 31, i);
+    while bits != 0 {
+        if bits & 1 != 0 {
+            y ^= v;
+        }
+        bits >>= 1;
+        v ^= v >> 1;
+    }
+    y
+}
+
+/// [`sobol_dim1_slow`] of each byte value at each of the four byte positions, so that the
+/// matrix product is four lookups (the index is a scrambled 32-bit number: a loop over its
+/// bits would branch unpredictably up to 32 times).
+static SOBOL_DIM1_BYTES: [[u32; 256]; 4] = {
+    let mut table = [[0u32; 256]; 4];
+    let mut position = 0;
+    while position < 4 {
+        let mut byte = 0;
+        while byte < 256 {
+            table[position][byte] = sobol_dim1_slow((byte as u32) << (8 * position));
+            byte += 1;
+        }
+        position += 1;
+    }
+    table
+};
+
+/// The first two dimensions of the Sobol sequence at index `i`, as binary fractions: the van
+/// der Corput sequence, and the dimension whose generator matrix is Pascal's triangle mod 2.
+#[inline(always)]
+fn sobol_pair(i: u32) -> (u32, u32) {
+    let t = &SOBOL_DIM1_BYTES;
+    let y = t[0][(i & 0xff) as usize]
+        ^ t[1][((i >> 8) & 0xff) as usize]
+        ^ t[2][((i >> 16) & 0xff) as usize]
+        ^ t[3][(i >> 24) as usize];
+    (i.reverse_bits(), y)
+}
+
+/// One scrambled progressive sequence of points in the unit square: Owen-scrambled Sobol
+/// (0,2) points, its index order shuffled by a scramble too, so that the first `2^k` points
+/// are an aligned block of `2^k` Sobol points (a (0,k,2)-net: one point per elementary box
+/// of area `2^-k`), scrambled (Burley 2020). Keyed by the stream's random bits: a point's
+/// replicates are independent sequences.
+#[derive(Clone, Copy, Debug)]
+pub struct Progressive {
+    shuffle: u32,
+    scramble: (u32, u32),
+}
+
+/// Counters of a [`Stream`] that key progressive sequences: far above any grid's ray index.
+const PROGRESSIVE_COUNTER: u64 = 1 << 62;
+
+impl Progressive {
+    /// Replicate `replicate` of the point whose random numbers are `stream`.
+    #[inline]
+    pub fn new(stream: Stream, replicate: u32) -> Self {
+        let a = stream.bits(PROGRESSIVE_COUNTER + 2 * replicate as u64);
+        let b = stream.bits(PROGRESSIVE_COUNTER + 2 * replicate as u64 + 1);
+        Progressive {
+            shuffle: a as u32,
+            scramble: ((a >> 32) as u32, b as u32),
+        }
+    }
+
+    /// Point `j` as binary fractions (bit 31 first).
+    #[inline(always)]
+    pub fn bits(&self, j: u32) -> (u32, u32) {
+        let (x, y) = sobol_pair(owen_scramble(j, self.shuffle));
+        (
+            owen_scramble(x, self.scramble.0),
+            owen_scramble(y, self.scramble.1),
+        )
+    }
+
+    /// Point `j` in `[0, 1)²` (24 bits a coordinate, as [`Stream::pair`]).
+    #[inline(always)]
+    pub fn point(&self, j: u32) -> Vec2 {
+        Self::to_point(self.bits(j))
+    }
+
+    /// Binary fractions from [`Progressive::bits`] as a point of `[0, 1)²`.
+    #[inline(always)]
+    pub fn to_point((x, y): (u32, u32)) -> Vec2 {
+        let scale = 1.0 / (1u32 << 24) as f32;
+        Vec2::new((x >> 8) as f32 * scale, (y >> 8) as f32 * scale)
+    }
+
+    /// Of the first `n = 2^m` points (`m ≥ 3`), the box of the `2^a × 2^b` grid (`a + b =
+    /// m − 3`, `b ≥ a`) that point `(x, y)` lies in, row by row: each box holds exactly 8 of
+    /// them, the prefix being a (0,m,2)-net. `None` where `n` is not such a power of two.
+    #[inline(always)]
+    pub fn net_box(n: u32, (x, y): (u32, u32)) -> Option<u32> {
+        if !n.is_power_of_two() || n < 8 {
+            return None;
+        }
+        let k = n.trailing_zeros() - 3;
+        let (a, b) = (k / 2, k - k / 2);
+        let column = x.checked_shr(32 - a).unwrap_or(0);
+        let row = y.checked_shr(32 - b).unwrap_or(0);
+        Some((row << a) | column)
+    }
+}
+
 /// A 64-bit finaliser with full avalanche (Pelle Evensen's "moremur", a SplitMix64 variant).
 #[inline(always)]
 fn mix64(mut x: u64) -> u64 {
@@ -181,6 +338,69 @@ mod tests {
             seen[((u.y * b as f32) as u32 * a + (u.x * a as f32) as u32) as usize] += 1;
         }
         assert!(seen.iter().all(|&c| c == 1));
+    }
+
+    #[test]
+    fn every_power_of_two_prefix_of_a_progressive_sequence_is_a_net() {
+        // The first 2^k points of any replicate: one point in each box of every 2^a × 2^b
+        // grid with a + b = k, for k up to 12 and many keys.
+        for key in 0..24u64 {
+            let sequence = Progressive::new(Stream::new(7, key), (key % 5) as u32);
+            for k in 0..=12u32 {
+                for a in 0..=k {
+                    let b = k - a;
+                    let mut seen = vec![false; 1 << k];
+                    for j in 0..1u32 << k {
+                        let (x, y) = sequence.bits(j);
+                        let (bx, by) = (
+                            x.checked_shr(32 - a).unwrap_or(0),
+                            y.checked_shr(32 - b).unwrap_or(0),
+                        );
+                        let cell = ((by << a) | bx) as usize;
+                        assert!(!seen[cell], "key {key}, k = {k}, {a} × {b}: box {cell} twice");
+                        seen[cell] = true;
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_sobol_tables_are_the_generator_matrix() {
+        for i in (0..1u32 << 16).chain([u32::MAX, 0x8000_0001, 0xdead_beef, 0x1234_5678]) {
+            assert_eq!(sobol_pair(i).1, sobol_dim1_slow(i), "{i:#x}");
+        }
+    }
+
+    #[test]
+    fn a_nets_boxes_hold_eight_points_each() {
+        for m in 3..=12u32 {
+            let n = 1 << m;
+            let sequence = Progressive::new(Stream::new(3, m as u64), 1);
+            let mut count = vec![0u32; (n / 8) as usize];
+            for j in 0..n {
+                count[Progressive::net_box(n, sequence.bits(j)).unwrap() as usize] += 1;
+            }
+            assert!(count.iter().all(|&c| c == 8), "n = {n}: {count:?}");
+        }
+        assert_eq!(Progressive::net_box(12, (0, 0)), None);
+        assert_eq!(Progressive::net_box(4, (0, 0)), None);
+    }
+
+    #[test]
+    fn progressive_sequences_are_keyed_and_their_points_in_the_unit_square() {
+        let s = |seed, key, r| Progressive::new(Stream::new(seed, key), r);
+        assert_ne!(s(1, 2, 0).bits(0), s(1, 3, 0).bits(0));
+        assert_ne!(s(1, 2, 0).bits(0), s(2, 2, 0).bits(0));
+        assert_ne!(s(1, 2, 0).bits(5), s(1, 2, 1).bits(5));
+        assert_eq!(s(1, 2, 3).bits(9), s(1, 2, 3).bits(9));
+        let n = 1 << 16;
+        let mean: Vec2 = (0..n).map(|j| s(4, 4, 0).point(j)).sum::<Vec2>() / n as f32;
+        assert!((mean - Vec2::splat(0.5)).abs().max_element() < 1e-3, "{mean}");
+        assert!((0..n).all(|j| {
+            let p = s(4, 4, 0).point(j);
+            (0.0..1.0).contains(&p.x) && (0.0..1.0).contains(&p.y)
+        }));
     }
 
     #[test]

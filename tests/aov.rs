@@ -7,7 +7,7 @@ use hmdist::error::Error;
 use hmdist::estimators::{registry, AdaptiveParams, Aov, AovImage, GatherParams, PhotonParams};
 use hmdist::progress::Silent;
 use hmdist::render::{render, RenderOptions, Rendered};
-use hmdist::sampling::Weighting;
+use hmdist::sampling::{Sampler, Weighting};
 use hmdist::scene::procedural::validation;
 use hmdist::scene::Scene;
 
@@ -113,11 +113,19 @@ fn ao_on_the_slab_floor_is_h_over_r_squared() {
 fn the_error_bar_predicts_the_spread_of_h_over_seeds() {
     // 30 seeds, 8 rounds of 32 rays, 8 × 8 pixels of cube: per pixel, the standard deviation
     // of H over the seeds against the mean predicted error bar (relerr · H), and how often H
-    // lies within ±2 predicted σ of its mean over the seeds.
+    // lies within ±2 predicted σ of its mean over the seeds. With either sampler: the grid's
+    // rounds are independent grids, sobol's independently scrambled sequences.
+    for sampler in [Sampler::Grid, Sampler::Sobol] {
+        error_bar_against_spread(sampler);
+    }
+}
+
+fn error_bar_against_spread(sampler: Sampler) {
     let scene = Scene::load("cube").unwrap();
     let config = GatherParams {
         rays: 256,
         rounds: Some(8),
+        sampler,
         ..GatherParams::default()
     };
     let seeds = 30;
@@ -155,7 +163,7 @@ fn the_error_bar_predicts_the_spread_of_h_over_seeds() {
     let median = ratios[ratios.len() / 2];
     let coverage = |(within, total): (usize, usize)| within as f64 / total as f64;
     println!(
-        "away from creases ({} pixels): observed / predicted spread median {median:.3}, range {:.3} … {:.3}, \
+        "{sampler:?}: away from creases ({} pixels): observed / predicted spread median {median:.3}, range {:.3} … {:.3}, \
          ±2σ coverage {:.3}; near creases ({} pixels): coverage {:.3}",
         ratios.len(),
         ratios[0],
@@ -167,10 +175,13 @@ fn the_error_bar_predicts_the_spread_of_h_over_seeds() {
     // 30 seeds leave the observed spread uncertain by about 13 %, 8 rounds each error bar by
     // about 27 % (so ±2σ from 8 rounds covers about 91 %, Student's t with 7 degrees of
     // freedom, not 95 %): a median within a factor 1.25, coverage within [0.87, 0.97].
-    assert!((0.8..1.25).contains(&median), "median ratio {median}");
+    assert!(
+        (0.8..1.25).contains(&median),
+        "{sampler:?}: median ratio {median}"
+    );
     assert!(
         (0.87..0.97).contains(&coverage(smooth)),
-        "coverage {}",
+        "{sampler:?}: coverage {}",
         coverage(smooth)
     );
 }

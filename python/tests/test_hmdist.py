@@ -244,3 +244,14 @@ def test_a_missing_gpu_raises_device_error():
     env = dict(os.environ, VK_ICD_FILENAMES="/nonexistent/icd.json", VK_DRIVER_FILES="/nonexistent/icd.json")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
     assert out.stdout.startswith("DeviceError:"), out.stdout + out.stderr
+
+
+def test_a_method_parameter_added_to_its_struct_is_a_keyword():
+    # `sampler` is one field of gather's parameter struct, nothing on the Python side.
+    s = hmdist.Scene.builtin("cube")
+    grid, _ = s.render(size=(8, 6), rays=16, seed=4)
+    sobol, report = s.render(size=(8, 6), rays=16, seed=4, sampler="sobol")
+    assert np.isfinite(sobol).all() and report["sampler"] == "sobol"
+    assert not np.array_equal(grid, sobol)
+    with pytest.raises(ValueError, match="sampler"):
+        s.render(size=(8, 6), rays=16, sampler="halton")

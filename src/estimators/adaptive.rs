@@ -143,6 +143,7 @@ impl Estimator for Adaptive {
                 weighting: self.weighting,
                 strata: [grid.0, grid.1],
                 rounds: FIRST_ROUNDS,
+                sampler: Default::default(),
             }),
             adaptive: Some(AdaptiveParameters {
                 tolerance: self.tolerance,

@@ -26,7 +26,7 @@ pub use crate::backend::DispatchSplit;
 use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::report::{Details, DeviceDetails, GatherParameters, Parameters};
-use crate::sampling::{hemisphere, in_stratum, strata, Stream, Weighting};
+use crate::sampling::{hemisphere, in_stratum, strata, Progressive, Sampler, Stream, Weighting};
 
 /// Default gather rays per pixel for `hmdist render`: an 8 × 8 stratified grid, a clean
 /// picture of `cube` at 1024² in about 10 s on 2 cores. The paper's reference uses 65,536;
@@ -41,9 +41,14 @@ pub struct Gather {
     rounds: u32,
     ao_radius: Option<f32>,
     backend: Backend,
+    sampler: Sampler,
     #[cfg_attr(not(feature = "gpu"), allow(dead_code))]
     split: Option<DispatchSplit>,
 }
+
+/// Why a sampler other than the grid is refused on the GPU.
+const SAMPLER_ON_GPU: &str =
+    "sobol runs on the CPU backend only (the GPU gather makes grid directions): use --backend cpu";
 
 /// Rounds of gather rays when the `relerr` AOV is asked for and no rounds are named.
 pub const DEFAULT_ERROR_ROUNDS: u32 = 8;
@@ -60,6 +65,10 @@ pub struct GatherParams {
     /// Direction weighting over the hemisphere.
     #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Weighting::Cosine))]
     pub weighting: Weighting,
+    /// How the directions fill the hemisphere: one jittered grid of the N rays, or a
+    /// progressive Owen-scrambled Sobol sequence (each round its own; CPU backend only).
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Sampler::Grid))]
+    pub sampler: Sampler,
     /// Cast the rays as R independent rounds (R divides N), for the relerr AOV
     /// [default: 1; 8 with --aov relerr].
     #[cfg_attr(
@@ -83,6 +92,7 @@ impl Default for GatherParams {
         GatherParams {
             rays: DEFAULT_RAYS,
             weighting: Weighting::default(),
+            sampler: Sampler::default(),
             rounds: None,
             ao_radius: None,
             backend: Backend::default(),
@@ -102,7 +112,10 @@ impl GatherParams {
     /// The gather these parameters name, checked.
     pub fn build(&self) -> Result<Gather> {
         let gather = Gather::new(self.rays, self.weighting)?.with_rounds(self.rounds.unwrap_or(1))?;
-        Ok(gather.with_ao_radius(self.ao_radius)?.with_backend(self.backend))
+        gather
+            .with_ao_radius(self.ao_radius)?
+            .with_backend(self.backend)
+            .with_sampler(self.sampler)
     }
 }
 
@@ -118,6 +131,7 @@ impl Gather {
             rounds: 1,
             ao_radius: None,
             backend: Backend::Cpu,
+            sampler: Sampler::Grid,
             split: None,
         })
     }
@@ -148,6 +162,27 @@ impl Gather {
         Gather { backend, ..self }
     }
 
+    /// The directions drawn by `sampler` ([`Sampler::Grid`] by default). The GPU gather makes
+    /// grid directions only: [`Sampler::Sobol`] on [`Backend::Gpu`] or
+    /// [`Backend::GpuSoftware`] is refused, and [`Backend::Auto`] runs it on the CPU.
+    pub fn with_sampler(self, sampler: Sampler) -> Result<Self> {
+        let backend = match (sampler, self.backend) {
+            (Sampler::Sobol, Backend::Auto) => Backend::Cpu,
+            (Sampler::Sobol, b) if b.is_gpu() => return Err(Error::invalid("sampler", SAMPLER_ON_GPU)),
+            (_, b) => b,
+        };
+        Ok(Gather {
+            sampler,
+            backend,
+            ..self
+        })
+    }
+
+    /// How the directions are drawn.
+    pub fn sampler(&self) -> Sampler {
+        self.sampler
+    }
+
     /// On the GPU, the work split into dispatches of at most `split`'s points and rays
     /// instead of dispatches of about half a second. The result is the same: this is for
     /// tests that check so.
@@ -166,6 +201,13 @@ impl Gather {
     /// The GPU to cast on, or `None` for the CPU: see [`Gather::with_backend`].
     #[cfg(feature = "gpu")]
     pub(crate) fn gpu(&self, accel: &crate::accel::Accel) -> Result<Option<crate::gpu::GpuScene>> {
+        if self.sampler != Sampler::Grid {
+            // The GPU gather makes grid directions only: see `with_sampler`.
+            return match self.backend.is_gpu() {
+                true => Err(Error::invalid("sampler", SAMPLER_ON_GPU)),
+                false => Ok(None),
+            };
+        }
         crate::gpu::open_for(self.backend, |software| {
             crate::gpu::GpuScene::new(accel, software)
         })
@@ -224,12 +266,13 @@ impl Gather {
     }
 
     /// The gather directions of the point keyed `key`, in its local frame (z = normal), as one
-    /// stratified grid of all its rays: the one definition shared by `gather` (with one
-    /// round) and the CPU cube map, which looks the same directions up in its hemicube (SPEC
-    /// §3.2). The GPU cube map's shader mirrors it.
+    /// round of all its rays (one stratified grid, or the first N points of the progressive
+    /// sequence): the one definition shared by `gather` (with one round) and the CPU cube
+    /// map, which looks the same directions up in its hemicube (SPEC §3.2). The GPU cube
+    /// map's shader mirrors the grid.
     #[inline]
     pub fn directions(&self, seed: u64, key: u64) -> impl Iterator<Item = Vec3> + '_ {
-        round_directions(self.weighting, seed, key, 0, self.rays)
+        sampler_directions(self.sampler, self.weighting, seed, key, 0, self.rays)
     }
 
     /// The gather rays of pixel `pixel` from its surface point: the origin (offset off the
@@ -253,7 +296,7 @@ impl Gather {
         key: u64,
         clamp: DistanceClamp,
     ) -> (f32, u32) {
-        let mut point = PointGather::new(self.weighting, None);
+        let mut point = PointGather::new(self.weighting, None).with_sampler(self.sampler);
         let per_round = self.rays / self.rounds;
         for _ in 0..self.rounds {
             point.round(accel, start, seed, key, per_round, clamp);
@@ -268,6 +311,7 @@ impl Gather {
             weighting: self.weighting,
             strata: [grid.0, grid.1],
             rounds: self.rounds,
+            sampler: self.sampler,
         }
     }
 }
@@ -480,6 +524,45 @@ pub(crate) fn round_directions(
         .map(move |(stratum, counter)| hemisphere(weighting, in_stratum(stratum, grid, random.pair(counter))))
 }
 
+/// The directions of round `round` (of `n` rays) of the point keyed `key` drawn by `sampler`:
+/// [`round_directions`]'s grid, or the first `n` points of the point's progressive sequence
+/// number `round` (each round an independently scrambled sequence).
+#[inline]
+pub(crate) fn sampler_directions(
+    sampler: Sampler,
+    weighting: Weighting,
+    seed: u64,
+    key: u64,
+    round: u32,
+    n: u32,
+) -> impl Iterator<Item = Vec3> {
+    match sampler {
+        Sampler::Grid => Directions::Grid(round_directions(weighting, seed, key, round, n)),
+        Sampler::Sobol => {
+            let sequence = Progressive::new(Stream::new(seed, key), round);
+            Directions::Sobol((0..n).map(move |j| hemisphere(weighting, sequence.point(j))))
+        }
+    }
+}
+
+/// The directions of one of the samplers.
+enum Directions<G, S> {
+    Grid(G),
+    Sobol(S),
+}
+
+impl<G: Iterator<Item = Vec3>, S: Iterator<Item = Vec3>> Iterator for Directions<G, S> {
+    type Item = Vec3;
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<Vec3> {
+        match self {
+            Directions::Grid(g) => g.next(),
+            Directions::Sobol(s) => s.next(),
+        }
+    }
+}
+
 /// How a round's rays are grouped into packets for [`RayCaster::hit_distances`]: spans of
 /// consecutive ray indices (`span` rays: two rows of the strata grid, or [`PACKET`]), each
 /// cast as packets of up to [`PACKET`] rays: 4 × 2 blocks of neighbouring strata where the
@@ -491,6 +574,19 @@ pub(crate) struct Packets {
     blocks: bool,
     /// Rays per span.
     pub span: u32,
+}
+
+/// The packets of `n` rays drawn by `sampler`: the grid's 4 × 2 blocks ([`packets`]), or
+/// runs of 8 in ray order for a progressive sequence.
+pub(crate) fn sampler_packets(sampler: Sampler, n: u32) -> Packets {
+    match sampler {
+        Sampler::Grid => packets(strata(n)),
+        Sampler::Sobol => Packets {
+            a: n,
+            blocks: false,
+            span: PACKET as u32,
+        },
+    }
 }
 
 /// The packets of an `a × b` strata grid; see [`Packets`].
@@ -537,9 +633,36 @@ impl Packets {
     }
 }
 
+/// The first `n` directions of `sequence` (a net: `n` a power of two, at least 8) into
+/// `local`, and the ray indices ordered by the net's elementary box
+/// ([`Progressive::net_box`]), 8 to a box: neighbouring directions, cast as one packet. The
+/// directions are [`sampler_directions`]'s, bit for bit.
+fn net_order(sequence: &Progressive, weighting: Weighting, n: u32, local: &mut [Vec3]) -> Vec<u32> {
+    let mut cells = Vec::with_capacity(n as usize);
+    let mut start = vec![0u32; (n / 8) as usize + 1];
+    for (j, w) in local[..n as usize].iter_mut().enumerate() {
+        let bits = sequence.bits(j as u32);
+        *w = hemisphere(weighting, Progressive::to_point(bits));
+        let cell = Progressive::net_box(n, bits).expect("a net") as usize;
+        start[cell + 1] += 1;
+        cells.push(cell as u32);
+    }
+    for c in 1..start.len() {
+        start[c] += start[c - 1];
+    }
+    let mut order = vec![0u32; n as usize];
+    for (j, &cell) in cells.iter().enumerate() {
+        let slot = &mut start[cell as usize];
+        order[*slot as usize] = j as u32;
+        *slot += 1;
+    }
+    order
+}
+
 /// One point's gather so far, round by round: H, its error bar and the AOVs.
 pub(crate) struct PointGather {
     weighting: Weighting,
+    sampler: Sampler,
     ao_radius: Option<f32>,
     /// Every ray, in ray order: H.
     pub mean: HarmonicMean,
@@ -560,6 +683,7 @@ impl PointGather {
     pub fn new(weighting: Weighting, ao_radius: Option<f32>) -> Self {
         PointGather {
             weighting,
+            sampler: Sampler::Grid,
             ao_radius,
             mean: HarmonicMean::default(),
             rounds: 0,
@@ -571,6 +695,11 @@ impl PointGather {
             ao_open: 0.0,
             ao_total: 0.0,
         }
+    }
+
+    /// This point's rounds drawn by `sampler` (default [`Sampler::Grid`]).
+    pub fn with_sampler(self, sampler: Sampler) -> Self {
+        PointGather { sampler, ..self }
     }
 
     /// Casts the next round, of `n` rays.
@@ -603,33 +732,54 @@ impl PointGather {
         clamp: DistanceClamp,
         progress: &dyn Progress,
     ) {
-        let grouping = packets(strata(n));
-        let mut directions = round_directions(self.weighting, seed, key, self.rounds, n);
+        let grouping = sampler_packets(self.sampler, n);
+        let mut directions = sampler_directions(self.sampler, self.weighting, seed, key, self.rounds, n);
+        // A progressive round of a power of two rays is a net: cast as packets of the 8
+        // points of each of its elementary boxes (neighbouring directions), in one span.
+        let net = match self.sampler {
+            Sampler::Sobol if Progressive::net_box(n, (0, 0)).is_some() => {
+                Some(Progressive::new(Stream::new(seed, key), self.rounds))
+            }
+            _ => None,
+        };
         let mut inverse_sum = 0.0f64;
         let poll = crate::interrupt::POLL_RAYS as u64;
         let mut pending = 0u64;
         // Distances and local directions of the rays of one span of ray indices.
-        let span = grouping.span as usize;
+        let span = if net.is_some() {
+            n as usize
+        } else {
+            grouping.span as usize
+        };
         let (mut distances, mut local) = (vec![0.0f32; span], vec![Vec3::ZERO; span]);
         let (origins, leaving) = ([start.origin; PACKET], [start.leaving; PACKET]);
+        let cast = |rays: &[u32], base: u32, local: &[Vec3], distances: &mut [f32]| {
+            let mut world = [Vec3::ZERO; PACKET];
+            for (world, &j) in world.iter_mut().zip(rays) {
+                *world = start.frame.to_world(local[(j - base) as usize]);
+            }
+            let mut t = [0.0f32; PACKET];
+            let k = rays.len();
+            accel.hit_distances(&origins[..k], &world[..k], &leaving[..k], clamp.max, &mut t);
+            for (&t, &j) in t.iter().zip(rays) {
+                distances[(j - base) as usize] = t;
+            }
+        };
         for (base, count) in (0..n)
             .step_by(span)
             .map(|base| (base, span.min((n - base) as usize)))
         {
-            for (w, next) in local[..count].iter_mut().zip(&mut directions) {
-                *w = next;
-            }
-            for packet in grouping.within(base, count as u32) {
-                let rays = packet.rays();
-                let mut world = [Vec3::ZERO; PACKET];
-                for (world, &j) in world.iter_mut().zip(rays) {
-                    *world = start.frame.to_world(local[(j - base) as usize]);
+            if let Some(sequence) = &net {
+                let order = net_order(sequence, self.weighting, n, &mut local);
+                for rays in order.chunks(PACKET) {
+                    cast(rays, 0, &local, &mut distances);
                 }
-                let mut t = [0.0f32; PACKET];
-                let k = rays.len();
-                accel.hit_distances(&origins[..k], &world[..k], &leaving[..k], clamp.max, &mut t);
-                for (&t, &j) in t.iter().zip(rays) {
-                    distances[(j - base) as usize] = t;
+            } else {
+                for (w, next) in local[..count].iter_mut().zip(&mut directions) {
+                    *w = next;
+                }
+                for packet in grouping.within(base, count as u32) {
+                    cast(packet.rays(), base, &local, &mut distances);
                 }
             }
             for (&d, w) in distances[..count].iter().zip(&local[..count]) {
@@ -772,7 +922,7 @@ impl PixelWorker for GatherWorker<'_> {
     fn pixel(&mut self, hit: &Hit, pixel: u64, tally: &mut Tally, aov: &mut AovSample) -> f32 {
         let (c, g) = (self.pixels.context, self.pixels.gather);
         let start = GatherStart::at_hit(hit);
-        let mut point = PointGather::new(g.weighting, self.pixels.ao_radius);
+        let mut point = PointGather::new(g.weighting, self.pixels.ao_radius).with_sampler(g.sampler);
         let per_round = g.rays / g.rounds;
         for _ in 0..g.rounds {
             point.round_counted(

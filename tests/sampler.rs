@@ -1,0 +1,130 @@
+//! The progressive sampler of `gather` (`--sampler sobol`, issue #25): the closed forms of
+//! SPEC §1 hold with it, it is deterministic across thread counts, each round is its own
+//! sequence, and the GPU, which makes grid directions only, refuses it by name. (Its
+//! stratification, every power-of-two prefix a (0,k,2)-net, is tested in `sampling.rs`.)
+
+mod common;
+
+use hmdist::error::Error;
+use hmdist::estimators::{registry, Estimator, GatherParams};
+use hmdist::render::{RenderOptions, Rendered};
+use hmdist::sampling::{Sampler, Weighting};
+use hmdist::scene::procedural::validation;
+use hmdist::scene::Scene;
+
+fn sobol(rays: u32, weighting: Weighting, rounds: u32) -> Box<dyn Estimator> {
+    let params = GatherParams {
+        rays,
+        weighting,
+        rounds: Some(rounds),
+        sampler: Sampler::Sobol,
+        ..GatherParams::default()
+    };
+    registry::build("gather", &params, &[]).unwrap()
+}
+
+fn rendered(scene: &Scene, estimator: &dyn Estimator, size: u32, threads: Option<usize>) -> Rendered {
+    let options = RenderOptions {
+        threads,
+        ..RenderOptions::default()
+    };
+    common::render_square(scene, estimator, size, options).unwrap()
+}
+
+#[test]
+fn with_the_sobol_sampler_the_closed_forms_hold() {
+    // Inside a closed sphere the mean of R/H over pixels is 1 (1/H is unbiased for 1/R).
+    let r = validation::SPHERE_RADIUS;
+    let sphere = validation::sphere(r, 7);
+    let image = rendered(&sphere, sobol(4096, Weighting::Cosine, 1).as_ref(), 32, None);
+    assert_eq!(image.report.escaped_rays, Some(0));
+    let mean: f64 =
+        image.image.data.iter().map(|&h| r as f64 / h as f64).sum::<f64>() / image.image.data.len() as f64;
+    assert!((mean - 1.0).abs() < 0.005, "mean R/H = {mean}");
+    // The slab's floor: 3h/2 under cosine weighting, 2h under uniform (not a power of two
+    // of rays, in 4 rounds: each round a sequence of its own).
+    let h = validation::SLAB_HEIGHT;
+    let slab = validation::slab(h, 1000.0);
+    for (weighting, expected) in [(Weighting::Cosine, 1.5 * h), (Weighting::Uniform, 2.0 * h)] {
+        let got = rendered(&slab, sobol(60_000, weighting, 4).as_ref(), 1, None)
+            .image
+            .data[0];
+        assert!(
+            (got / expected - 1.0).abs() < 0.005,
+            "{weighting:?}: H = {got}, expected {expected}"
+        );
+    }
+}
+
+#[test]
+fn sobol_gather_is_the_same_for_1_and_2_threads_and_not_the_grid() {
+    let scene = Scene::load("cube").unwrap();
+    let bits = |r: &Rendered| r.image.data.iter().map(|h| h.to_bits()).collect::<Vec<_>>();
+    let one = rendered(&scene, sobol(64, Weighting::Cosine, 1).as_ref(), 24, Some(1));
+    let two = rendered(&scene, sobol(64, Weighting::Cosine, 1).as_ref(), 24, Some(2));
+    assert_eq!(bits(&one), bits(&two));
+    let grid = registry::build("gather", &serde_json::json!({"rays": 64}), &[]).unwrap();
+    let grid = rendered(&scene, grid.as_ref(), 24, Some(2));
+    assert_ne!(bits(&one), bits(&grid));
+    // Two rounds of 32 are two sequences, not the first 64 points of one.
+    let rounds = rendered(&scene, sobol(64, Weighting::Cosine, 2).as_ref(), 24, Some(2));
+    assert_ne!(bits(&one), bits(&rounds));
+    // The report says which sampler; the grid's report has no such key (as before samplers).
+    assert_eq!(
+        one.report.parameters.gather.as_ref().unwrap().sampler,
+        Sampler::Sobol
+    );
+    let json: serde_json::Value = serde_json::from_str(&one.report.to_json()).unwrap();
+    assert_eq!(json["sampler"], "sobol");
+    let json: serde_json::Value = serde_json::from_str(&grid.report.to_json()).unwrap();
+    assert!(json.get("sampler").is_none(), "{json}");
+}
+
+#[test]
+fn the_gpu_refuses_the_sobol_sampler_by_name_and_auto_runs_it_on_the_cpu() {
+    for backend in ["gpu", "gpu-software"] {
+        let params = serde_json::json!({"sampler": "sobol", "backend": backend});
+        let err = registry::build("gather", &params, &[]).err().expect("refused");
+        assert!(
+            matches!(
+                &err,
+                Error::Parameter {
+                    name: Some("sampler"),
+                    ..
+                }
+            ),
+            "{err}"
+        );
+    }
+    // `auto` (the default) renders it, on the CPU: the same bits as `cpu`.
+    let scene = Scene::load("cube").unwrap();
+    let image = |params| {
+        let estimator = registry::build("gather", &params, &[]).unwrap();
+        rendered(&scene, estimator.as_ref(), 8, None).image.data
+    };
+    let auto = image(serde_json::json!({"sampler": "sobol"}));
+    let cpu = image(serde_json::json!({"sampler": "sobol", "backend": "cpu"}));
+    assert_eq!(auto, cpu);
+}
+
+#[test]
+fn hmdist_render_takes_the_sampler_flag() {
+    use common::cli::{hmdist_ok, read_json, refuses, render_args};
+    let dir = common::Scratch::new("sampler-cli");
+    let mut args = render_args(&["--sampler", "sobol", "--backend", "cpu"]);
+    args.extend(["--out", "s.exr"]);
+    hmdist_ok(dir.path(), &args);
+    assert_eq!(read_json(&dir.join("s.json"))["sampler"], "sobol");
+    refuses(
+        "sampler-gpu",
+        &[],
+        &render_args(&["--sampler", "sobol", "--backend", "gpu"]),
+        "--sampler sobol runs on the CPU backend only",
+    );
+    refuses(
+        "sampler-cubemap",
+        &[],
+        &render_args(&["--method", "cubemap", "--sampler", "sobol"]),
+        "--method cubemap does not read --sampler",
+    );
+}
