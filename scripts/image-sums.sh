@@ -3,6 +3,7 @@
 # small, and prints one sha256 per EXR: run it before and after a refactor
 # that must not change images (issue #23), and diff the two listings.
 #   scripts/image-sums.sh [HMDIST_BINARY] > sums.txt
+# (It spells K --gather, the older name of --nearest, so that it runs on older builds too.)
 set -euo pipefail
 bin=${1:-target/release/hmdist}
 tmp=$(mktemp -d)
