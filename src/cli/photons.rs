@@ -20,6 +20,8 @@ pub enum PhotonsCommand {
 }
 
 #[derive(Args)]
+// The photon parameters' --photon-map is what this command writes: hidden here (and refused).
+#[command(mut_arg("photon_map", |arg| arg.hide(true)))]
 pub struct BuildArgs {
     /// Scene: a built-in (cube, hall, sphere, slab, dome) or a file.
     #[arg(long, default_value = "cube")]
