@@ -171,12 +171,19 @@ impl Progressive {
         Vec2::new((x >> 8) as f32 * scale, (y >> 8) as f32 * scale)
     }
 
+    /// Whether the first `n` points are a net whose elementary boxes hold 8 points each:
+    /// `n = 2^m` with `m ≥ 3`.
+    #[inline(always)]
+    pub fn is_net(n: u32) -> bool {
+        n.is_power_of_two() && n >= 8
+    }
+
     /// Of the first `n = 2^m` points (`m ≥ 3`), the box of the `2^a × 2^b` grid (`a + b =
     /// m − 3`, `b ≥ a`) that point `(x, y)` lies in, row by row: each box holds exactly 8 of
     /// them, the prefix being a (0,m,2)-net. `None` where `n` is not such a power of two.
     #[inline(always)]
     pub fn net_box(n: u32, (x, y): (u32, u32)) -> Option<u32> {
-        if !n.is_power_of_two() || n < 8 {
+        if !Self::is_net(n) {
             return None;
         }
         let k = n.trailing_zeros() - 3;

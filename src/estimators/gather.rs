@@ -576,16 +576,13 @@ pub(crate) struct Packets {
     pub span: u32,
 }
 
-/// The packets of `n` rays drawn by `sampler`: the grid's 4 × 2 blocks ([`packets`]), or
-/// runs of 8 in ray order for a progressive sequence.
+/// The packets of `n` rays drawn by `sampler`: the grid's 4 × 2 blocks ([`packets`]), or,
+/// for a progressive sequence that is not a net (see [`Progressive::is_net`]), runs of 8 in
+/// ray order (the packets of a `1 × n` grid).
 pub(crate) fn sampler_packets(sampler: Sampler, n: u32) -> Packets {
     match sampler {
         Sampler::Grid => packets(strata(n)),
-        Sampler::Sobol => Packets {
-            a: n,
-            blocks: false,
-            span: PACKET as u32,
-        },
+        Sampler::Sobol => packets((1, n)),
     }
 }
 
@@ -736,12 +733,8 @@ impl PointGather {
         let mut directions = sampler_directions(self.sampler, self.weighting, seed, key, self.rounds, n);
         // A progressive round of a power of two rays is a net: cast as packets of the 8
         // points of each of its elementary boxes (neighbouring directions), in one span.
-        let net = match self.sampler {
-            Sampler::Sobol if Progressive::net_box(n, (0, 0)).is_some() => {
-                Some(Progressive::new(Stream::new(seed, key), self.rounds))
-            }
-            _ => None,
-        };
+        let net = (self.sampler == Sampler::Sobol && Progressive::is_net(n))
+            .then(|| Progressive::new(Stream::new(seed, key), self.rounds));
         let mut inverse_sum = 0.0f64;
         let poll = crate::interrupt::POLL_RAYS as u64;
         let mut pending = 0u64;

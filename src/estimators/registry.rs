@@ -20,7 +20,7 @@ use super::photon::{PhotonEstimator, PhotonMethod, PhotonParams};
 use super::Estimator;
 use crate::error::{Error, Result};
 
-/// One method: what the CLI, the experiments and Python know of it. Made by [`method!`].
+/// One method: what the CLI, the experiments and Python know of it. Made by `method!` below.
 pub struct MethodEntry {
     /// The name `--method` takes and the report's `method`.
     pub name: &'static str,

@@ -363,6 +363,19 @@ impl<'a> Runner<'a> {
         Runner { backend, ..self }
     }
 
+    /// The options of an image of this run: the preset's size, `seed`, `aovs` and the
+    /// runner's kernel, the whole image.
+    fn render_options(&self, seed: u64, aovs: &[Aov]) -> RenderOptions {
+        RenderOptions {
+            width: self.params.size,
+            height: self.params.size,
+            seed,
+            aovs: aovs.to_vec(),
+            kernel: self.kernel,
+            ..RenderOptions::default()
+        }
+    }
+
     /// This runner casting rays with `kernel` (default [`Kernel::best`]; images do not
     /// depend on it).
     pub fn with_kernel(self, kernel: Kernel) -> Self {
@@ -554,14 +567,7 @@ impl<'a> Runner<'a> {
             s.stand_ins.set(s.stand_ins.get() + 1);
             return Ok(self.stand_in(aovs));
         }
-        let options = RenderOptions {
-            width: size,
-            height: size,
-            seed,
-            aovs: aovs.to_vec(),
-            kernel: self.kernel,
-            ..RenderOptions::default()
-        };
+        let options = self.render_options(seed, aovs);
         let rendered = self
             .render_in_parts(estimator, &options, &stem)
             .inspect_err(|_| {
@@ -766,14 +772,7 @@ impl<'a> Runner<'a> {
         if cubemaps.len() < 2 {
             return Ok(());
         }
-        let size = self.params.size;
-        let options = RenderOptions {
-            width: size,
-            height: size,
-            seed,
-            kernel: self.kernel,
-            ..RenderOptions::default()
-        };
+        let options = self.render_options(seed, &[]);
         let group: Vec<&crate::estimators::Cubemap> = cubemaps.iter().map(|(c, _)| c).collect();
         let estimators: Vec<&dyn Estimator> = cubemaps.iter().map(|(c, _)| c as &dyn Estimator).collect();
         let stems: Vec<String> = cubemaps.iter().map(|(_, s)| s.clone()).collect();
@@ -808,12 +807,8 @@ impl<'a> Runner<'a> {
         let size = self.params.size;
         let (shard, scale) = plan::calibration_shard(size);
         let options = RenderOptions {
-            width: size,
-            height: size,
-            seed,
             shard: Some(shard),
-            kernel: self.kernel,
-            ..RenderOptions::default()
+            ..self.render_options(seed, &[])
         };
         let start = Instant::now();
         let calibration = pass(&options).inspect_err(|_| plan.calibration_failed.set(true))?;
@@ -907,13 +902,8 @@ impl<'a> Runner<'a> {
             None => {
                 let (shard, scale) = plan::calibration_shard(size);
                 let options = RenderOptions {
-                    width: size,
-                    height: size,
-                    seed,
-                    aovs: aovs.to_vec(),
                     shard: Some(shard),
-                    kernel: self.kernel,
-                    ..RenderOptions::default()
+                    ..self.render_options(seed, aovs)
                 };
                 let start = Instant::now();
                 let calibration = render(&self.scene, estimator, &options, &Silent)
