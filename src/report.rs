@@ -369,14 +369,27 @@ impl Parameters {
 /// When adaptive gathering stops.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct AdaptiveParameters {
-    /// A pixel stops once the relative standard error of its H is below this.
+    /// A pixel stops once the standard error of its H is below `(tolerance · H +
+    /// abs_tolerance · l_diag) · (N / min_rays)^loosen`.
     pub tolerance: f32,
+    /// The absolute part of the stop, in units of the scene's diagonal; absent where 0 (every
+    /// report written before it).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub abs_tolerance: f32,
+    /// The stop's tolerance grows as `(N / min_rays)^loosen` with a pixel's rays N; absent
+    /// where 0 (fixed).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub loosen: f32,
     /// Rays before the first check (8 rounds).
     pub min_rays: u32,
     /// A pixel never casts more.
     pub max_rays: u32,
     /// Rays per round.
     pub rays_per_round: u32,
+}
+
+fn is_zero(x: &f32) -> bool {
+    *x == 0.0
 }
 
 /// The gather directions.

@@ -158,19 +158,27 @@ fn editing_a_mesh_that_a_toml_scene_references_renders_again_and_nothing_else_do
 }
 
 #[test]
-fn the_adaptive_study_compares_both_ways_at_every_tolerance_and_pictures_the_rays() {
+fn the_adaptive_study_compares_every_scheme_at_every_tolerance_and_pictures_the_rays() {
     let dir = Scratch::new("experiments-adaptive");
     let out = dir.join("out");
     let mut runner = Runner::new("slab", Preset::Quick, &out, &Silent).unwrap();
     runner.run("adaptive").unwrap();
     let csv = std::fs::read_to_string(out.join("adaptive.csv")).unwrap();
     println!("{csv}");
-    let rays = column(&csv, 1);
-    assert_eq!(rays.len(), 5, "one row per tolerance");
-    // Tighter tolerances cast more rays, within adaptive's bounds (128 … 2,048 per pixel).
-    assert!(rays.windows(2).all(|w| w[0] <= w[1]), "{rays:?}");
-    assert!(rays.iter().all(|r| (128.0..=2048.0).contains(r)), "{rays:?}");
-    for file in ["adaptive.svg", "adaptive_rays.png", "index.html"] {
+    let rays = column(&csv, 2);
+    assert_eq!(rays.len(), 15, "one row per scheme and tolerance");
+    // In each scheme tighter tolerances cast more rays, within its bounds (128 or 64 …
+    // 2,048 per pixel).
+    for (scheme, first) in rays.chunks(5).zip([128.0, 64.0, 64.0]) {
+        assert!(scheme.windows(2).all(|w| w[0] <= w[1]), "{rays:?}");
+        assert!(scheme.iter().all(|r| (first..=2048.0).contains(r)), "{rays:?}");
+    }
+    for file in [
+        "adaptive.svg",
+        "adaptive_p95.svg",
+        "adaptive_rays.png",
+        "index.html",
+    ] {
         assert!(out.join(file).exists(), "{file}");
     }
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();

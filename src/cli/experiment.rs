@@ -22,6 +22,10 @@ pub struct ExperimentArgs {
     /// quick: 48², reference 16384 rays, minutes; paper: 1024², reference 65536 rays, hours.
     #[arg(long, value_enum, default_value_t = Preset::Quick)]
     preset: Preset,
+    /// Image side in pixels instead of the preset's (48 for quick, 1024 for paper): its
+    /// other counts stay. Part of the image cache's key.
+    #[arg(long, value_name = "PIXELS")]
+    size: Option<u32>,
     /// Output folder: tables (CSV, Markdown), index.html, and the image cache that reruns reuse.
     #[arg(long, default_value = "experiments")]
     out: PathBuf,
@@ -59,7 +63,8 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
     let bar = Bar::new(args.quiet);
     let mut runner = Runner::new(&args.scene, preset, &args.out, &bar)?
         .with_backend(args.backend)
-        .with_kernel(hmdist::accel::Kernel::from_env()?);
+        .with_kernel(hmdist::accel::Kernel::from_env()?)
+        .with_size(args.size)?;
     if let Some(shard) = args.shard {
         runner = runner.with_shard(shard)?;
     }

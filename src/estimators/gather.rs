@@ -272,7 +272,13 @@ impl Gather {
     /// map's shader mirrors the grid.
     #[inline]
     pub fn directions(&self, seed: u64, key: u64) -> impl Iterator<Item = Vec3> + '_ {
-        sampler_directions(self.sampler, self.weighting, seed, key, 0, self.rays)
+        sampler_directions(
+            self.sampler,
+            self.weighting,
+            (seed, key),
+            (Rounds::Replicates, 0),
+            self.rays,
+        )
     }
 
     /// The gather rays of pixel `pixel` from its surface point: the origin (offset off the
@@ -525,22 +531,65 @@ pub(crate) fn round_directions(
 }
 
 /// The directions of round `round` (of `n` rays) of the point keyed `key` drawn by `sampler`:
-/// [`round_directions`]'s grid, or the first `n` points of the point's progressive sequence
-/// number `round` (each round an independently scrambled sequence).
+/// [`round_directions`]'s grid, or `n` points of one of the point's progressive sequences,
+/// from `rounds`' [`SequencePart`] of round `round`.
 #[inline]
 pub(crate) fn sampler_directions(
     sampler: Sampler,
     weighting: Weighting,
-    seed: u64,
-    key: u64,
-    round: u32,
+    (seed, key): (u64, u64),
+    (rounds, round): (Rounds, u32),
     n: u32,
 ) -> impl Iterator<Item = Vec3> {
     match sampler {
         Sampler::Grid => Directions::Grid(round_directions(weighting, seed, key, round, n)),
         Sampler::Sobol => {
-            let sequence = Progressive::new(Stream::new(seed, key), round);
-            Directions::Sobol((0..n).map(move |j| hemisphere(weighting, sequence.point(j))))
+            let part = rounds.part(round, n);
+            let sequence = Progressive::new(Stream::new(seed, key), part.replicate);
+            let first = part.first;
+            Directions::Sobol((0..n).map(move |j| hemisphere(weighting, sequence.point(first + j))))
+        }
+    }
+}
+
+/// How a point's rounds of progressive directions relate: what `--rounds` means for
+/// `gather --sampler sobol`, and how `adaptive --sampler sobol` goes on (issue #25).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) enum Rounds {
+    /// Each round the first points of its own independently scrambled sequence: replicates,
+    /// whose spread is an unbiased error of their mean, each a coarser net than one sequence
+    /// of all the rays.
+    #[default]
+    Replicates,
+    /// Round k the k-th block of one sequence: all the rays are the first N points of one
+    /// sequence, as accurate as `gather --sampler sobol --rays N`; the blocks' spread
+    /// overstates the error of their mean (consecutive blocks of a net are negatively
+    /// correlated), so it is an error bound rather than an error bar.
+    Blocks,
+}
+
+/// Which points of which sequence a round draws.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SequencePart {
+    /// The replicate (the sequence's scramble).
+    pub replicate: u32,
+    /// Its first point's index.
+    pub first: u32,
+}
+
+impl Rounds {
+    /// The points round `round` of `n` rays draws (every round of `n`).
+    #[inline]
+    pub fn part(self, round: u32, n: u32) -> SequencePart {
+        match self {
+            Rounds::Replicates => SequencePart {
+                replicate: round,
+                first: 0,
+            },
+            Rounds::Blocks => SequencePart {
+                replicate: 0,
+                first: round * n,
+            },
         }
     }
 }
@@ -630,15 +679,22 @@ impl Packets {
     }
 }
 
-/// The first `n` directions of `sequence` (a net: `n` a power of two, at least 8) into
-/// `local`, and the ray indices ordered by the net's elementary box
+/// The `n` directions of `sequence` from point `first` (a net: `n` a power of two, at least
+/// 8, and `first` a multiple of `n`, so the points are an aligned block of the sequence) into
+/// `local`, and their indices from `first` ordered by the net's elementary box
 /// ([`Progressive::net_box`]), 8 to a box: neighbouring directions, cast as one packet. The
 /// directions are [`sampler_directions`]'s, bit for bit.
-fn net_order(sequence: &Progressive, weighting: Weighting, n: u32, local: &mut [Vec3]) -> Vec<u32> {
+fn net_order(
+    sequence: &Progressive,
+    weighting: Weighting,
+    (first, n): (u32, u32),
+    local: &mut [Vec3],
+) -> Vec<u32> {
+    debug_assert!(first.is_multiple_of(n));
     let mut cells = Vec::with_capacity(n as usize);
     let mut start = vec![0u32; (n / 8) as usize + 1];
     for (j, w) in local[..n as usize].iter_mut().enumerate() {
-        let bits = sequence.bits(j as u32);
+        let bits = sequence.bits(first + j as u32);
         *w = hemisphere(weighting, Progressive::to_point(bits));
         let cell = Progressive::net_box(n, bits).expect("a net") as usize;
         start[cell + 1] += 1;
@@ -660,6 +716,7 @@ fn net_order(sequence: &Progressive, weighting: Weighting, n: u32, local: &mut [
 pub(crate) struct PointGather {
     weighting: Weighting,
     sampler: Sampler,
+    sequence_rounds: Rounds,
     ao_radius: Option<f32>,
     /// Every ray, in ray order: H.
     pub mean: HarmonicMean,
@@ -681,6 +738,7 @@ impl PointGather {
         PointGather {
             weighting,
             sampler: Sampler::Grid,
+            sequence_rounds: Rounds::Replicates,
             ao_radius,
             mean: HarmonicMean::default(),
             rounds: 0,
@@ -697,6 +755,15 @@ impl PointGather {
     /// This point's rounds drawn by `sampler` (default [`Sampler::Grid`]).
     pub fn with_sampler(self, sampler: Sampler) -> Self {
         PointGather { sampler, ..self }
+    }
+
+    /// How its progressive rounds relate (default [`Rounds::Replicates`]; the grid's rounds
+    /// are each their own grid either way).
+    pub fn with_rounds(self, sequence_rounds: Rounds) -> Self {
+        PointGather {
+            sequence_rounds,
+            ..self
+        }
     }
 
     /// Casts the next round, of `n` rays.
@@ -730,11 +797,13 @@ impl PointGather {
         progress: &dyn Progress,
     ) {
         let grouping = sampler_packets(self.sampler, n);
-        let mut directions = sampler_directions(self.sampler, self.weighting, seed, key, self.rounds, n);
+        let round = (self.sequence_rounds, self.rounds);
+        let mut directions = sampler_directions(self.sampler, self.weighting, (seed, key), round, n);
         // A progressive round of a power of two rays is a net: cast as packets of the 8
         // points of each of its elementary boxes (neighbouring directions), in one span.
+        let part = self.sequence_rounds.part(self.rounds, n);
         let net = (self.sampler == Sampler::Sobol && Progressive::is_net(n))
-            .then(|| Progressive::new(Stream::new(seed, key), self.rounds));
+            .then(|| Progressive::new(Stream::new(seed, key), part.replicate));
         let mut inverse_sum = 0.0f64;
         let poll = crate::interrupt::POLL_RAYS as u64;
         let mut pending = 0u64;
@@ -763,7 +832,7 @@ impl PointGather {
             .map(|base| (base, span.min((n - base) as usize)))
         {
             if let Some(sequence) = &net {
-                let order = net_order(sequence, self.weighting, n, &mut local);
+                let order = net_order(sequence, self.weighting, (part.first, n), &mut local);
                 for rays in order.chunks(PACKET) {
                     cast(rays, 0, &local, &mut distances);
                 }

@@ -315,6 +315,17 @@ impl<'a> Runner<'a> {
         })
     }
 
+    /// Images `size` pixels square instead of the preset's (none: the preset's); at least 1.
+    pub fn with_size(mut self, size: Option<u32>) -> Result<Self> {
+        if let Some(size) = size {
+            if size == 0 {
+                return Err(Error::invalid("size", "must be at least 1 pixel, not 0"));
+            }
+            self.params.size = size;
+        }
+        Ok(self)
+    }
+
     /// This runner making a plan ([`plan`]) instead of running: `run` calibrates every image
     /// that is not cached, renders nothing whole and writes `plan.json`, `plan.md` and
     /// `plan.csv` into the output folder, and nothing else.
