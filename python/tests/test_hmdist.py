@@ -255,3 +255,17 @@ def test_a_method_parameter_added_to_its_struct_is_a_keyword():
     assert not np.array_equal(grid, sobol)
     with pytest.raises(ValueError, match="sampler"):
         s.render(size=(8, 6), rays=16, sampler="halton")
+
+
+def test_adaptive_takes_its_sampler_and_both_tolerances_as_keywords():
+    # Issue #25: adaptive's sobol blocks, --abs-tolerance and --loosen, with nothing on the
+    # Python side; the rays AOV keeps to the budget and the report names what was asked.
+    s = hmdist.Scene.builtin("cube")
+    image, report, aovs = s.render(size=(8, 6), method="adaptive", seed=2, aov="rays", sampler="sobol",
+                                   tolerance=0.0, abs_tolerance=0.001, loosen=1.0, min_rays=64, max_rays=256)
+    assert np.isfinite(image).all()
+    assert ((aovs["rays"] >= 64) & (aovs["rays"] <= 256)).all()
+    assert report["abs_tolerance"] == pytest.approx(0.001)
+    assert report["loosen"] == 1.0 and report["sampler"] == "sobol"
+    with pytest.raises(ValueError, match="tolerance"):
+        s.render(size=(4, 4), method="adaptive", tolerance=0.0)

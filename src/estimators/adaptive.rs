@@ -180,7 +180,7 @@ impl Adaptive {
             return Err(Error::invalid("abs_tolerance", message));
         }
         if abs_tolerance == 0.0 && self.tolerance == 0.0 {
-            let message = "and abs_tolerance are both 0: a pixel would never stop before max_rays";
+            let message = "is 0, and so is the absolute tolerance: give one of them, or a pixel never stops before max_rays";
             return Err(Error::invalid("tolerance", message));
         }
         Ok(Adaptive {
@@ -330,8 +330,8 @@ impl PixelWorker for AdaptivePixels<'_> {
         for _ in 0..FIRST_ROUNDS {
             point.round(c.accel, &start, c.seed, pixel, n, c.clamp);
         }
-        // The stop σ_H < T·H + A·l_diag, divided by H. relerr is NaN where every ray escaped
-        // (H = ∞: nothing more to learn there), and the comparison false.
+        // The stop (see `bound`). relerr is NaN where every ray escaped (H = ∞: nothing more
+        // to learn there), and the comparison false.
         while point.rays + n <= a.max_rays
             && point.relerr() >= a.bound(point.rays, point.mean.value(), self.abs_error)
         {
