@@ -6,15 +6,15 @@
 //! l_diag) · (N / min_rays)^loosen` after N rays (relative, absolute in units of the scene's
 //! diagonal, as f_diff; with `loosen` 1 a pixel stops where another round would buy less
 //! error per ray than at its first check, which spends the rays where they lower the mean
-//! error most), or another round would pass `max_rays`. A pixel's rounds depend only on its own rays: the image is the same
-//! for any thread count.
+//! error most), or another round would pass `max_rays`. A pixel's rounds depend only on its
+//! own rays: the image is the same for any thread count.
 //!
 //! With the grid sampler (the default) each round is its own jittered stratified grid, as
 //! `gather`'s rounds: a pixel that stops at N rays has the H of `gather --rays N --rounds
 //! N/(min_rays/8)`. With `--sampler sobol` the rounds are consecutive blocks of one
-//! Owen-scrambled Sobol sequence ([`Rounds::Blocks`], issue #25): a pixel that stops at N rays
-//! has the H of `gather --sampler sobol --rays N`, so going on costs no stratification; the
-//! blocks' spread overstates the error (a conservative stop).
+//! Owen-scrambled Sobol sequence (`Rounds::Blocks` in `gather.rs`, issue #25): a pixel that
+//! stops at N rays has the H of `gather --sampler sobol --rays N`, so going on costs no
+//! stratification; the blocks' spread overstates the error (a conservative stop).
 
 use super::gather::PointGather;
 use super::gather::Rounds;
@@ -51,7 +51,7 @@ pub struct AdaptiveParams {
     #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Sampler::Grid))]
     pub sampler: Sampler,
     /// A pixel stops once the standard error of its H is below T · H + A · l_diag (T
-    /// relative, A absolute in units of the scene's diagonal).
+    /// relative, A absolute in units of the scene's diagonal), loosened by --loosen.
     #[cfg_attr(
         feature = "cli",
         arg(long, value_name = "T", default_value_t = DEFAULT_TOLERANCE, help_heading = "AOVs and adaptive")
