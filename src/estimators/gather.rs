@@ -554,12 +554,11 @@ pub(crate) fn sampler_directions(
 
 /// How a point's rounds of progressive directions relate: what `--rounds` means for
 /// `gather --sampler sobol`, and how `adaptive --sampler sobol` goes on (issue #25).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Rounds {
     /// Each round the first points of its own independently scrambled sequence: replicates,
     /// whose spread is an unbiased error of their mean, each a coarser net than one sequence
     /// of all the rays.
-    #[default]
     Replicates,
     /// Round k the k-th block of one sequence: all the rays are the first N points of one
     /// sequence, as accurate as `gather --sampler sobol --rays N`; the blocks' spread
