@@ -396,3 +396,65 @@ fn an_image_rendered_in_parts_is_the_whole_image_bit_for_bit_and_leaves_no_parts
     }
     assert_eq!(p["shards"].as_array().unwrap().len(), 16);
 }
+
+#[test]
+fn a_reference_passed_in_is_used_instead_of_rendered_and_one_that_does_not_fit_is_refused() {
+    let dir = Scratch::new("experiments-reference");
+    let (first, second) = (dir.join("first"), dir.join("second"));
+    fn runner<'a>(out: &Path, size: u32, progress: &'a Renders) -> Runner<'a> {
+        Runner::new("slab", Preset::Quick, out, progress)
+            .unwrap()
+            .with_size(Some(size))
+            .unwrap()
+    }
+    let rendered_first = Renders::default();
+    runner(&first, 12, &rendered_first).run("fig9").unwrap();
+    // The reference is the one gather image fig9 renders (the others are cube maps).
+    let reference = cached_stems(&first)
+        .into_iter()
+        .find(|s| s.starts_with("gather-"))
+        .expect("fig9 rendered its reference");
+    let given = dir.join("given.exr");
+    std::fs::copy(first.join("cache").join(format!("{reference}.exr")), &given).unwrap();
+    let report = std::fs::read_to_string(first.join("cache").join(format!("{reference}.json"))).unwrap();
+    std::fs::write(dir.join("given.json"), &report).unwrap();
+
+    let rendered_second = Renders::default();
+    runner(&second, 12, &rendered_second)
+        .with_reference(&given)
+        .unwrap()
+        .run("fig9")
+        .unwrap();
+    let count = |r: &Renders| r.0.load(std::sync::atomic::Ordering::Relaxed);
+    assert_eq!(
+        count(&rendered_second),
+        count(&rendered_first) - 1,
+        "all but the reference"
+    );
+    assert_eq!(cached_stems(&first), cached_stems(&second));
+    for file in ["fig9.csv", "fig9.png"] {
+        assert_eq!(
+            std::fs::read(first.join(file)).unwrap(),
+            std::fs::read(second.join(file)).unwrap(),
+            "{file}"
+        );
+    }
+
+    // Another size, another seed, a missing report: refused, naming what differs.
+    let refused = |size: u32, exr: &Path| {
+        let out = dir.join("refused");
+        match runner(&out, size, &Renders::default()).with_reference(exr) {
+            Ok(_) => panic!("{} at {size}² was taken", exr.display()),
+            Err(e) => e.to_string(),
+        }
+    };
+    assert!(refused(16, &given).contains("its size is 12x12, this run's is 16x16"));
+    std::fs::write(
+        dir.join("given.json"),
+        report.replace("\"seed\": 1000003", "\"seed\": 7"),
+    )
+    .unwrap();
+    assert!(refused(12, &given).contains("its seed is 7"));
+    std::fs::remove_file(dir.join("given.json")).unwrap();
+    assert!(refused(12, &given).contains("given.json"));
+}

@@ -37,6 +37,12 @@ pub struct ExperimentArgs {
     /// of the image cache's key.
     #[arg(long, value_enum, default_value_t = Backend::Auto)]
     backend: Backend,
+    /// Take the reference image (gather, the preset's reference rays, seed 1000003) from this
+    /// EXR and the report beside it (same name, .json) instead of rendering it: refused
+    /// unless the report says it is this run's reference (scene, size, parameters, version).
+    /// docs/paper-scale/cube/reference.exr is cube's at --preset paper --backend cpu.
+    #[arg(long, value_name = "EXR")]
+    reference: Option<PathBuf>,
     /// Print what the run will cost and render nothing: every image it needs (each once),
     /// which are cached, and each one's seconds, estimated from a calibration render of a few
     /// rows; written to OUT/plan.md, plan.csv and plan.json. A later run's report puts the
@@ -65,6 +71,9 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
         .with_backend(args.backend)
         .with_kernel(hmdist::accel::Kernel::from_env()?)
         .with_size(args.size)?;
+    if let Some(reference) = &args.reference {
+        runner = runner.with_reference(reference)?;
+    }
     if let Some(shard) = args.shard {
         runner = runner.with_shard(shard)?;
     }

@@ -530,13 +530,107 @@ impl<'a> Runner<'a> {
         seed: u64,
         aovs: &[Aov],
     ) -> Result<(HmdImage, RenderReport, Vec<HmdImage>)> {
+        let estimator = self.method_estimator(method, params, aovs)?;
+        self.image_with(estimator.as_ref(), seed, aovs)
+    }
+
+    /// The estimator of method `method` (a registry name) with `params` and `aovs`, on the
+    /// runner's backend where the method has one.
+    fn method_estimator(
+        &self,
+        method: &str,
+        params: &impl serde::Serialize,
+        aovs: &[Aov],
+    ) -> Result<Box<dyn Estimator>> {
         let entry = registry::method(method)?;
         let mut params = registry::object(params)?;
         if entry.reads("backend") {
             let backend = serde_json::to_value(self.backend).expect("a backend serialises");
             params.insert("backend".into(), backend);
         }
-        self.image_with(entry.build(&params, aovs)?.as_ref(), seed, aovs)
+        entry.build(&params, aovs)
+    }
+
+    /// This runner taking its reference image (gather with the preset's reference ray count
+    /// and [`REFERENCE_SEED`]) from the EXR `exr_path` and the report beside it (the same
+    /// name ending in `.json`) instead of rendering it: the report must say the image is the
+    /// one this run would render (method, parameters, seed, size, scene, hmdist's version);
+    /// then both files go into the cache as that image. Call it after the size and backend
+    /// are set. `docs/paper-scale/cube/reference.exr` is `cube`'s at `--preset paper`.
+    pub fn with_reference(self, exr_path: &Path) -> Result<Self> {
+        let params = crate::estimators::GatherParams {
+            rays: self.params.reference_rays,
+            ..Default::default()
+        };
+        let estimator = self.method_estimator("gather", &params, &[])?;
+        let stem = self.stem(estimator.as_ref(), REFERENCE_SEED, &[]);
+        let json_path = exr_path.with_extension("json");
+        let text = std::fs::read_to_string(&json_path)
+            .map_err(|e| Error::io(&json_path, "read the reference's report", e))?;
+        let report: RenderReport = serde_json::from_str(&text).map_err(|e| {
+            Error::invalid(
+                "reference",
+                format!("{} is not an hmdist render report: {e}", json_path.display()),
+            )
+        })?;
+        let size = self.params.size;
+        let checks: [(&str, String, String); 8] = [
+            (
+                "hmdist version",
+                report.hmdist_version.clone(),
+                env!("CARGO_PKG_VERSION").into(),
+            ),
+            ("method", report.method.clone(), estimator.method().into()),
+            ("scene", report.scene.clone(), self.scene.name.clone()),
+            (
+                "triangles",
+                report.triangles.to_string(),
+                self.scene.mesh.triangle_count().to_string(),
+            ),
+            (
+                "diagonal",
+                report.l_diag.to_string(),
+                self.scene.diagonal().to_string(),
+            ),
+            (
+                "size",
+                format!("{}x{}", report.width, report.height),
+                format!("{size}x{size}"),
+            ),
+            ("seed", report.seed.to_string(), REFERENCE_SEED.to_string()),
+            parameters_check(&report.parameters, &estimator.parameters()),
+        ];
+        if let Some((what, found, wanted)) = checks.iter().find(|(_, found, wanted)| found != wanted) {
+            return Err(Error::invalid(
+                "reference",
+                format!(
+                    "{} is not this run's reference image: its {what} is {found}, this run's is {wanted}",
+                    exr_path.display()
+                ),
+            ));
+        }
+        let image = exr::read(exr_path)?;
+        if (image.width, image.height) != (size, size) {
+            return Err(Error::invalid(
+                "reference",
+                format!(
+                    "{} is {}x{} pixels, but its report says {size}x{size}",
+                    exr_path.display(),
+                    image.width,
+                    image.height
+                ),
+            ));
+        }
+        let (cached_exr, cached_json) = (
+            self.cache.join(format!("{stem}.exr")),
+            self.cache.join(format!("{stem}.json")),
+        );
+        if !cached_json.exists() {
+            let bytes = std::fs::read(exr_path).map_err(|e| Error::io(exr_path, "read", e))?;
+            write_atomically(&cached_exr, &bytes)?;
+            write_atomically(&cached_json, text.as_bytes())?;
+        }
+        Ok(self)
     }
 
     /// The image `estimator` renders at the preset's size with `seed`, from the cache when
@@ -938,6 +1032,30 @@ impl<'a> Runner<'a> {
         drop(items);
         Ok(cached.unwrap_or_else(|| self.stand_in(aovs)))
     }
+}
+
+/// `("parameters", found, wanted)`: the parameters `wanted` and, in the same order, the values
+/// `found` has under their names (the rest of `found`, other groups' fields, is not compared).
+fn parameters_check(
+    found: &crate::report::Parameters,
+    wanted: &crate::report::Parameters,
+) -> (&'static str, String, String) {
+    let as_object = |p: &crate::report::Parameters| match serde_json::to_value(p) {
+        Ok(serde_json::Value::Object(map)) => map,
+        _ => unreachable!("parameters serialise to an object"),
+    };
+    let (found, wanted) = (as_object(found), as_object(wanted));
+    let found: serde_json::Map<String, serde_json::Value> = wanted
+        .keys()
+        .map(|k| {
+            (
+                k.clone(),
+                found.get(k).cloned().unwrap_or(serde_json::Value::Null),
+            )
+        })
+        .collect();
+    let json = |m: serde_json::Map<String, serde_json::Value>| serde_json::Value::Object(m).to_string();
+    ("parameters", json(found), json(wanted))
 }
 
 /// The cached image at `exr_path` with its report at `json_path` and its `aovs`, where both
