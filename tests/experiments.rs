@@ -458,3 +458,21 @@ fn a_reference_passed_in_is_used_instead_of_rendered_and_one_that_does_not_fit_i
     std::fs::remove_file(dir.join("given.json")).unwrap();
     assert!(refused(12, &given).contains("given.json"));
 }
+
+#[test]
+fn several_experiments_run_in_the_listed_order_of_experiments_each_once() {
+    let names = |list: &str| -> Vec<&str> {
+        hmdist::experiments::select(list)
+            .unwrap()
+            .iter()
+            .map(|e| e.name)
+            .collect()
+    };
+    assert_eq!(names("fig9,table1, fig9"), ["table1", "fig9"]);
+    assert_eq!(names("table3,all").len(), hmdist::experiments::EXPERIMENTS.len());
+    let error = match hmdist::experiments::select("table1,tabel3") {
+        Ok(_) => panic!("a misspelt name was taken"),
+        Err(e) => e.to_string(),
+    };
+    assert!(error.contains("'tabel3' is not all or one of table1"), "{error}");
+}

@@ -13,9 +13,10 @@ use super::bar::Bar;
 
 #[derive(Args)]
 pub struct ExperimentArgs {
-    /// Experiment: all, or one of these.
-    #[arg(value_parser = experiment_names())]
-    name: String,
+    /// Experiment: all, or one or several of these (table3,fig10 or table3 fig10): they run
+    /// in this order, each once, and share one report.
+    #[arg(value_parser = experiment_names(), value_delimiter = ',', required = true)]
+    names: Vec<String>,
     /// Scene: a built-in (cube, hall, sphere, slab, dome) or a file.
     #[arg(long, default_value = "cube")]
     scene: String,
@@ -65,7 +66,8 @@ fn experiment_names() -> clap::builder::PossibleValuesParser {
 
 pub fn run(args: ExperimentArgs) -> Result<()> {
     let preset = args.preset;
-    select(&args.name)?;
+    let names = args.names.join(",");
+    select(&names)?;
     let bar = Bar::new(args.quiet);
     let mut runner = Runner::new(&args.scene, preset, &args.out, &bar)?
         .with_backend(args.backend)
@@ -80,7 +82,7 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
     if args.plan {
         runner = runner.with_plan()?;
     }
-    runner.run(&args.name)?;
+    runner.run(&names)?;
     if let Some(plan) = &runner.planned {
         if !args.quiet {
             println!("{}", plan.items_table().markdown());

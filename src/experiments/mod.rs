@@ -111,19 +111,22 @@ pub const EXPERIMENTS: &[Experiment] = &[
     },
 ];
 
-/// The experiments `name` stands for: every one for `all`.
-pub fn select(name: &str) -> Result<Vec<&'static Experiment>> {
-    if name == "all" {
+/// The experiments `names` stands for: every one for `all`, or a comma-separated list of
+/// names (`table3,fig10`), run in [`EXPERIMENTS`]' order, each once.
+pub fn select(names: &str) -> Result<Vec<&'static Experiment>> {
+    let asked: Vec<&str> = names.split(',').map(str::trim).collect();
+    if asked.contains(&"all") {
         return Ok(EXPERIMENTS.iter().collect());
     }
-    match EXPERIMENTS.iter().find(|e| e.name == name) {
-        Some(e) => Ok(vec![e]),
-        None => {
-            let names: Vec<&str> = EXPERIMENTS.iter().map(|e| e.name).collect();
-            let message = format!("'{name}' is not all or one of {}", names.join(", "));
-            Err(Error::invalid("experiment", message))
-        }
+    if let Some(unknown) = asked.iter().find(|&&a| !EXPERIMENTS.iter().any(|e| e.name == a)) {
+        let known: Vec<&str> = EXPERIMENTS.iter().map(|e| e.name).collect();
+        let message = format!(
+            "'{unknown}' is not all or one of {} (or several, comma-separated)",
+            known.join(", ")
+        );
+        return Err(Error::invalid("experiment", message));
     }
+    Ok(EXPERIMENTS.iter().filter(|e| asked.contains(&e.name)).collect())
 }
 
 /// Images that cast at least this many rays (2³³, about 20 minutes at 7 M rays/s) are
