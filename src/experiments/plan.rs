@@ -4,9 +4,9 @@
 //! and, where it is not there, *calibrated* instead of rendered: the same estimator renders
 //! every `M`-th row of the image (a shard, [`crate::shard`], of [`CALIBRATION_ROWS`] rows
 //! spread over the image), and its seconds are extrapolated to the whole image: the BVH
-//! build and the work an estimator does once per image (tracing and indexing photons,
-//! uploading to the GPU) count once, the primary rays and the per-pixel work count
-//! `size / rows` times. An image two experiments need is listed once, under the first that
+//! build, the primary rays and the work an estimator does once per image (tracing and
+//! indexing photons, uploading to the GPU) count once, the per-pixel work `size / rows`
+//! times ([`extrapolate`]). An image two experiments need is listed once, under the first that
 //! asks for it (in the order `all` runs them), with the others named beside it. Work that is
 //! not an image (Table 4's photon map builds) is estimated by its experiment from a smaller
 //! instance of itself, timed.
@@ -115,18 +115,25 @@ pub fn calibration_shard(size: u32) -> (crate::shard::Shard, f64) {
     (shard, size as f64 / rows as f64)
 }
 
-/// The seconds of the whole image from a calibration render's report: the primary rays and
-/// the estimator's per-pixel work scaled by `scale`; the BVH build, the once-per-image phases
-/// and whatever of the total no phase names (setting up) as measured.
+/// The seconds of the whole image from a calibration render's report: the estimator's
+/// per-pixel work scaled by `scale` (where the report times it as a phase, the photon
+/// methods' `gather`, that phase; else all of the estimate but its once-per-image phases);
+/// the BVH build, the primary rays, the once-per-image phases (tracing and indexing
+/// photons, uploading to the GPU), the rest of the estimate and whatever of the total no
+/// phase names (setting up) as measured. The primary rays count once because a shard's
+/// primary pass still allocates and walks the whole image's G-buffer: at 1024² that fixed
+/// part is most of a calibration's primary seconds (20 ms of 8 rows against 170 ms for all
+/// 1,024), and scaling it counted 2.5 s too many per photon image.
 pub fn extrapolate(report: &RenderReport, scale: f64) -> f64 {
     let s = &report.seconds;
     let p = &s.phases;
     let once = [p.photon_trace, p.photon_index, p.gpu_upload]
         .iter()
         .fold(0.0, |total, phase| total + phase.unwrap_or(0.0));
-    let per_row = (s.primary + s.estimate - once).max(0.0);
+    let per_row = p.gather.unwrap_or((s.estimate - once).max(0.0));
+    let set_up = (s.estimate - once - per_row).max(0.0);
     let rest = (s.total - s.accel_build - s.primary - s.estimate).max(0.0);
-    s.accel_build + once + rest + per_row * scale
+    s.accel_build + s.primary + once + set_up + rest + per_row * scale
 }
 
 /// `method` with `parameters` and `seed`, in words, and its work at `pixels` pixels.
@@ -143,8 +150,18 @@ pub fn describe(method: &str, parameters: &Parameters, seed: u64, pixels: u64) -
             work = format!("{:.3e} lookups", pixels as f64 * rays as f64);
         }
     }
+    if let Some(g) = parameters.gather.as_ref().filter(|g| !g.sampler.is_grid()) {
+        what.push(format!("{} sampler", g.sampler.name()));
+    }
     if let Some(a) = &parameters.adaptive {
-        what.push(format!("tolerance {} (N ≤ {})", a.tolerance, a.max_rays));
+        let mut stop = format!("tolerance {}", a.tolerance);
+        if a.abs_tolerance != 0.0 {
+            stop += &format!(", absolute tolerance {}", a.abs_tolerance);
+        }
+        if a.loosen != 0.0 {
+            stop += &format!(", loosen {}", a.loosen);
+        }
+        what.push(format!("{stop} (N ≤ {})", a.max_rays));
         work = format!("≤ {:.3e} rays", pixels as f64 * a.max_rays as f64);
     }
     if let Some(p) = &parameters.photon {
@@ -307,7 +324,47 @@ mod tests {
     }
 
     #[test]
-    fn extrapolation_counts_the_build_and_the_photon_map_once_and_scales_the_rest() {
+    fn a_description_tells_apart_images_that_differ_in_sampler_or_stop() {
+        use crate::report::{AdaptiveParameters, GatherParameters};
+        let gather = |sampler| GatherParameters {
+            weighting: crate::sampling::Weighting::Cosine,
+            strata: [8, 4],
+            rounds: 1,
+            sampler,
+        };
+        let fixed = |sampler| Parameters {
+            rays: Some(32),
+            gather: Some(gather(sampler)),
+            ..Parameters::default()
+        };
+        let (grid, work) = describe("gather", &fixed(crate::sampling::Sampler::Grid), 1, 100);
+        assert_eq!(
+            (grid.as_str(), work.as_str()),
+            ("gather, N = 32, seed 1", "3.200e3 rays")
+        );
+        let (sobol, _) = describe("gather", &fixed(crate::sampling::Sampler::Sobol), 1, 100);
+        assert_eq!(sobol, "gather, N = 32, sobol sampler, seed 1");
+        let adaptive = Parameters {
+            gather: Some(gather(crate::sampling::Sampler::Sobol)),
+            adaptive: Some(AdaptiveParameters {
+                tolerance: 0.0,
+                abs_tolerance: 0.001,
+                loosen: 1.0,
+                min_rays: 64,
+                max_rays: 4096,
+                rays_per_round: 8,
+            }),
+            ..Parameters::default()
+        };
+        let (stop, _) = describe("adaptive", &adaptive, 1, 100);
+        assert_eq!(
+            stop,
+            "adaptive, sobol sampler, tolerance 0, absolute tolerance 0.001, loosen 1 (N ≤ 4096), seed 1"
+        );
+    }
+
+    #[test]
+    fn extrapolation_scales_only_the_per_pixel_work() {
         let mut report = RenderReport::default();
         report.seconds.accel_build = 1.0;
         report.seconds.phases.photon_trace = Some(2.0);
@@ -315,6 +372,13 @@ mod tests {
         report.seconds.primary = 0.125;
         report.seconds.estimate = 2.5 + 0.25;
         report.seconds.total = 1.0 + 0.125 + 2.75 + 0.5;
-        assert_eq!(extrapolate(&report, 8.0), 1.0 + 2.5 + 0.5 + 8.0 * 0.375);
+        // No per-pixel phase: all of the estimate but the photon map scales.
+        assert_eq!(extrapolate(&report, 8.0), 1.0 + 0.125 + 2.5 + 0.5 + 8.0 * 0.25);
+        // The photon gather timed as a phase: it scales, the estimate's set-up does not.
+        report.seconds.phases.gather = Some(0.1875);
+        assert_eq!(
+            extrapolate(&report, 8.0),
+            1.0 + 0.125 + 2.5 + 0.0625 + 0.5 + 8.0 * 0.1875
+        );
     }
 }
