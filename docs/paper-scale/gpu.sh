@@ -26,7 +26,10 @@ fi
 echo "GPU: $(nvidia-smi --query-gpu=name,memory.total --format=csv,noheader 2>/dev/null || echo none found)"
 echo "CPU: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | xargs), $(nproc) cores"
 echo "hmdist: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)"
-common=(--scene cube --preset paper --backend gpu --out "$out" --quiet)
+# The committed CPU reference (1024² × 65,536 rays) is every f_diff's reference, as the CPU
+# run's: the GPU's images are measured against CPU final gathering, as in the paper's Fig. 9.
+common=(--scene cube --preset paper --backend gpu --out "$out" --quiet
+        --reference docs/paper-scale/cube/reference.exr)
 
 # The plan first: a calibration of a few rows of every image (a few percent of the run).
 start=$(date +%s)

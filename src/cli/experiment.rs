@@ -40,7 +40,8 @@ pub struct ExperimentArgs {
     backend: Backend,
     /// Take the reference image (gather, the preset's reference rays, seed 1000003) from this
     /// EXR and the report beside it (same name, .json) instead of rendering it: refused
-    /// unless the report says it is this run's reference (scene, size, parameters, version).
+    /// unless the report says it is this run's reference (scene, size, parameters, version;
+    /// any backend).
     /// docs/paper-scale/cube/reference.exr is cube's at --preset paper --backend cpu.
     #[arg(long, value_name = "EXR")]
     reference: Option<PathBuf>,

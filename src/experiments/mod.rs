@@ -558,8 +558,10 @@ impl<'a> Runner<'a> {
     /// and [`REFERENCE_SEED`]) from the EXR `exr_path` and the report beside it (the same
     /// name ending in `.json`) instead of rendering it: the report must say the image is the
     /// one this run would render (method, parameters, seed, size, scene, hmdist's version);
-    /// then both files go into the cache as that image. Call it after the size and backend
-    /// are set. `docs/paper-scale/cube/reference.exr` is `cube`'s at `--preset paper`.
+    /// then both files go into the cache as that image. The backend that rendered it is not
+    /// compared: a GPU run measures its images against a CPU reference, as the paper's Fig. 9
+    /// does. Call it after the size and backend are set.
+    /// `docs/paper-scale/cube/reference.exr` is `cube`'s at `--preset paper`.
     pub fn with_reference(self, exr_path: &Path) -> Result<Self> {
         let params = crate::estimators::GatherParams {
             rays: self.params.reference_rays,
