@@ -563,11 +563,7 @@ impl<'a> Runner<'a> {
     /// does. Call it after the size and backend are set.
     /// `docs/paper-scale/cube/reference.exr` is `cube`'s at `--preset paper`.
     pub fn with_reference(self, exr_path: &Path) -> Result<Self> {
-        let params = crate::estimators::GatherParams {
-            rays: self.params.reference_rays,
-            ..Default::default()
-        };
-        let estimator = self.method_estimator("gather", &params, &[])?;
+        let estimator = self.method_estimator("gather", &rays::reference_params(&self), &[])?;
         let stem = self.stem(estimator.as_ref(), REFERENCE_SEED, &[]);
         let json_path = exr_path.with_extension("json");
         let text = std::fs::read_to_string(&json_path)
@@ -626,10 +622,7 @@ impl<'a> Runner<'a> {
                 ),
             ));
         }
-        let (cached_exr, cached_json) = (
-            self.cache.join(format!("{stem}.exr")),
-            self.cache.join(format!("{stem}.json")),
-        );
+        let (cached_exr, cached_json) = self.cache_paths(&stem);
         if !cached_json.exists() {
             let bytes = std::fs::read(exr_path).map_err(|e| Error::io(exr_path, "read", e))?;
             write_atomically(&cached_exr, &bytes)?;
@@ -656,10 +649,7 @@ impl<'a> Runner<'a> {
         crate::interrupt::check()?;
         let size = self.params.size;
         let stem = self.stem(estimator, seed, aovs);
-        let (exr_path, json_path) = (
-            self.cache.join(format!("{stem}.exr")),
-            self.cache.join(format!("{stem}.json")),
-        );
+        let (exr_path, json_path) = self.cache_paths(&stem);
         let request = self.shard.as_ref().map(|s| {
             let i = s.requests.get();
             s.requests.set(i + 1);
@@ -764,10 +754,7 @@ impl<'a> Runner<'a> {
                 .iter()
                 .map(|stem| {
                     let part = Self::part_stem(stem, k, count);
-                    (
-                        self.cache.join(format!("{part}.exr")),
-                        self.cache.join(format!("{part}.json")),
-                    )
+                    self.cache_paths(&part)
                 })
                 .collect();
             let cached: Option<Vec<_>> = paths
@@ -821,6 +808,14 @@ impl<'a> Runner<'a> {
         Ok(merged)
     }
 
+    /// Where the cache keeps the image `stem`: its EXR and its JSON report.
+    fn cache_paths(&self, stem: &str) -> (PathBuf, PathBuf) {
+        (
+            self.cache.join(format!("{stem}.exr")),
+            self.cache.join(format!("{stem}.json")),
+        )
+    }
+
     /// The cache stem of the image `estimator` renders with `seed` and `aovs` at the preset's
     /// size: a hash of everything that determines it.
     fn stem(&self, estimator: &dyn Estimator, seed: u64, aovs: &[Aov]) -> String {
@@ -841,10 +836,7 @@ impl<'a> Runner<'a> {
     /// Writes a rendered image and its report into the cache as `stem`: the JSON last, so
     /// that an image counts as cached only once both files are in place.
     fn cache_image(&self, stem: &str, rendered: &crate::render::Rendered) -> Result<()> {
-        let (exr_path, json_path) = (
-            self.cache.join(format!("{stem}.exr")),
-            self.cache.join(format!("{stem}.json")),
-        );
+        let (exr_path, json_path) = self.cache_paths(stem);
         write_atomically(
             &exr_path,
             &exr::encode(&rendered.image, &rendered.aovs, &exr_path)?,

@@ -57,10 +57,16 @@ fn cubemap_params(runner: &Runner, rays: u32) -> CubemapParams {
     }
 }
 
-/// The reference image: gather with the preset's reference ray count, its own seed.
+/// The reference image's parameters: gather with the preset's reference ray count.
+pub(super) fn reference_params(runner: &Runner) -> GatherParams {
+    gather_params(runner.params.reference_rays)
+}
+
+/// The reference image: gather with [`reference_params`], its own seed.
 pub(super) fn reference(runner: &Runner) -> Result<HmdImage> {
-    let params = gather_params(runner.params.reference_rays);
-    Ok(runner.method_image("gather", &params, REFERENCE_SEED)?.0)
+    Ok(runner
+        .method_image("gather", &reference_params(runner), REFERENCE_SEED)?
+        .0)
 }
 
 /// The cube maps of the preset's resolution that the ray studies of this run need: Table 1's,
