@@ -476,3 +476,28 @@ fn several_experiments_run_in_the_listed_order_of_experiments_each_once() {
     };
     assert!(error.contains("'tabel3' is not all or one of table1"), "{error}");
 }
+
+#[test]
+fn cube_maps_made_in_parts_by_the_multi_output_pass_are_not_rendered_again() {
+    // The paper preset's sweep (ten cube maps up to N = 16,384) at 8², every image of
+    // 8² × 256 rays or more in parts: each image is rendered (and counted) once.
+    let dir = Scratch::new("experiments-sweep-parts");
+    let out = dir.join("out");
+    let renders = Renders::default();
+    let mut runner = Runner::new("slab", Preset::Paper, &out, &renders)
+        .unwrap()
+        .with_size(Some(8))
+        .unwrap()
+        .with_part_rays(8 * 8 * 256);
+    runner.run("table1").unwrap();
+    let stems = cached_stems(&out);
+    assert_eq!(
+        renders.0.load(std::sync::atomic::Ordering::Relaxed),
+        stems.len() as u64,
+        "one render per image: {stems:?}"
+    );
+    for stem in stems.iter().filter(|s| s.starts_with("cubemap-")) {
+        let json = std::fs::read_to_string(out.join("cache").join(format!("{stem}.json"))).unwrap();
+        assert!(json.contains("\"shards\""), "{stem} is the merged pass's image");
+    }
+}
