@@ -45,9 +45,13 @@ def parse(html):
         sections[re.match(r'<h2 id="([^"]+)"', part).group(1)] = part
     return head + "<body>\n", intro, preamble, sections, "</body>" + tail
 
+def write(page):
+    open(target + ".tmp", "w", encoding="utf-8").write(page)
+    os.replace(target + ".tmp", target)
+
 new = open(source, encoding="utf-8").read()
 if not run:
-    open(target, "w", encoding="utf-8").write(new)
+    write(new)
     sys.exit()
 head, intro, preamble, sections, tail = parse(new)
 if preamble.strip():
@@ -59,10 +63,9 @@ if os.path.exists(target):
         sys.exit(f"{target} is another scene's, preset's or size's report: not merged")
     sections = {**old_sections, **sections}
 rank = lambda s: (ORDER.index(s) if s in ORDER else len(ORDER), s)
-body = "".join(sections[s] for s in sorted(sections, key=rank))
-open(target + ".tmp", "w", encoding="utf-8").write(head + intro + body + tail)
-os.replace(target + ".tmp", target)
-print(f"{os.path.basename(target)}: sections {', '.join(sorted(sections, key=rank))}")
+order = sorted(sections, key=rank)
+write(head + intro + "".join(sections[s] for s in order) + tail)
+print(f"{os.path.basename(target)}: sections {', '.join(order)}")
 PY
 for f in "$out"/*.png; do
     python3 - "$f" "$dest/$(basename "$f")" <<'PY'
