@@ -19,6 +19,18 @@
 //! prefetching the children pushed on the stack gained 3–5 % on `cube` at 256 rays per point
 //! and nothing, or lost, at 4,096 and on `hall`; packets of ray j of 8 neighbouring pixels
 //! (different origins, one stratum) were no better than 4 × 2 blocks of one point's strata.
+//! Wider packets and the shared origin (2026-12-03): traversal generic over one, two or four
+//! groups of eight lanes (4 × 4, 8 × 2, 4 × 8, 8 × 4 blocks of strata, up to 32 rays), each
+//! node's `b − o` computed once for the packet when all its rays leave one point (children
+//! picked by a lane permute), and leaf blocks translated to that point once and then tested
+//! ray by ray. Bit-identical, and it cut node visits per ray (`gather_rays stats`, packet +
+//! single-ray nodes): `cube` 64² × 4,096 from 1.02 (4 × 2) to 0.62 (8 × 2) and 0.44 (8 × 4),
+//! `hall` 128² × 256 from 3.42 to 2.75 and 2.43; leaf blocks per ray stayed at 2.0 and 1.9,
+//! and that is where the time is. Mrays/s did not move beyond the noise (`cube` 256² × 256,
+//! 2 threads: 4 × 2 today 7.4–8.8, 8 × 2 8.2–8.6, 4 × 8 7.7–8.0; `hall`: today 5.5–6.2,
+//! 8 × 4 5.4–6.3), and the shared-origin 4 × 2 packet was 5–10 % *slower* on one thread
+//! (`cube` at 4,096: 4.6–5.3 vs 5.0–5.7 Mrays/s; the translated leaves won back part of
+//! that). Packets are not where the remaining time goes on scenes like these.
 //! Closures inside this `#[target_feature]` code are not inlined and turn every intrinsic
 //! into a call (the packet ran 40 % slower): use `#[inline(always)]` functions.
 
