@@ -305,6 +305,48 @@ fn a_plan_lists_each_image_once_and_exactly_those_a_run_then_renders_once_each()
     );
     let comparison = std::fs::read_to_string(out.join("plan_vs_actual.csv")).unwrap();
     assert_eq!(comparison.lines().count(), 1 + 9, "{comparison}");
+    let from_earlier_runs = |csv: &str| -> BTreeMap<String, f64> {
+        csv.lines()
+            .skip(1)
+            .map(|l| {
+                let cells: Vec<&str> = l.split(',').collect();
+                (cells[0].to_string(), cells[3].parse().unwrap())
+            })
+            .collect()
+    };
+    assert!(
+        from_earlier_runs(&comparison).values().all(|&s| s == 0.0),
+        "this run rendered everything: {comparison}"
+    );
+    // A run stopped after the plan and resumed: the second finds every image cached, and
+    // each experiment's seconds include its images' from their reports (read here).
+    Runner::new("slab", Preset::Quick, &out, &Silent)
+        .unwrap()
+        .run("all")
+        .unwrap();
+    let resumed = std::fs::read_to_string(out.join("plan_vs_actual.csv")).unwrap();
+    for (experiment, seconds) in from_earlier_runs(&resumed) {
+        let expected: f64 = plan
+            .items
+            .iter()
+            .filter(|i| i.experiment == experiment)
+            .filter_map(|i| i.cache.as_ref())
+            .map(|stem| {
+                let report: serde_json::Value = serde_json::from_str(
+                    &std::fs::read_to_string(out.join("cache").join(format!("{stem}.json"))).unwrap(),
+                )
+                .unwrap();
+                report["seconds"]["total"].as_f64().unwrap()
+            })
+            .sum();
+        assert!(
+            (seconds - expected).abs() <= 0.051,
+            "{experiment}: {seconds} s from earlier runs, its images' reports say {expected} s"
+        );
+        if experiment == "table1" {
+            assert!(expected > 0.0, "table1 renders images");
+        }
+    }
 
     let again = planned(&out);
     assert!(

@@ -257,6 +257,11 @@ pub struct Runner<'a> {
     pub planned: Option<Plan>,
     /// Wall seconds of each experiment this run ran, in order.
     pub timings: Vec<(String, f64)>,
+    /// Each image this run asked for, at its first asking: `Some(the seconds its report
+    /// gives)` where the cache already held it, `None` where this run rendered it. What an
+    /// earlier run rendered after the plan (one stopped at a session's end, then resumed)
+    /// counts in the plan against the run ([`plan::comparison`]).
+    first_looks: RefCell<std::collections::HashMap<String, Option<f64>>>,
     /// Images of at least this many rays are rendered in parts ([`PART_RAYS`]).
     part_rays: u64,
     /// The experiments this run runs.
@@ -313,6 +318,7 @@ impl<'a> Runner<'a> {
             plan: None,
             planned: None,
             timings: vec![],
+            first_looks: RefCell::default(),
             part_rays: PART_RAYS,
             running: vec![],
         })
@@ -508,7 +514,18 @@ impl<'a> Runner<'a> {
     /// The earlier plan's estimates beside this run's seconds, per experiment: see
     /// [`plan::comparison`].
     pub fn plan_against_run(&self) -> Option<Table> {
-        plan::comparison(&self.earlier_plan()?, &self.timings)
+        let looks = self.first_looks.borrow();
+        plan::comparison(&self.earlier_plan()?, &self.timings, &|stem| {
+            looks.get(stem).copied().flatten()
+        })
+    }
+
+    /// Notes the first asking for image `stem`: see [`Runner::first_looks`].
+    fn first_look(&self, stem: &str, cached_seconds: Option<f64>) {
+        self.first_looks
+            .borrow_mut()
+            .entry(stem.to_string())
+            .or_insert(cached_seconds);
     }
 
     /// The image method `method` (a registry name) renders with `params` (its parameter
@@ -660,6 +677,7 @@ impl<'a> Runner<'a> {
             return self.plan_image(plan, estimator, seed, aovs, stem, cached);
         }
         if let Some(cached) = cached {
+            self.first_look(&stem, Some(cached.1.seconds.total));
             return Ok(cached);
         }
         if let Some((s, false)) = request {
@@ -679,6 +697,7 @@ impl<'a> Runner<'a> {
             s.rendered.set(s.rendered.get() + 1);
         }
         self.cache_image(&stem, &rendered)?;
+        self.first_look(&stem, None);
         self.progress.advance(1);
         let channels = rendered
             .aovs
@@ -889,6 +908,7 @@ impl<'a> Runner<'a> {
         let rendered = self.render_outputs_in_parts(&estimators, &stems, &options, &pass)?;
         for (stem, rendered) in stems.iter().zip(&rendered) {
             self.cache_image(stem, rendered)?;
+            self.first_look(stem, None);
             self.progress.advance(1);
         }
         Ok(())

@@ -277,18 +277,41 @@ fn hours(seconds: f64) -> String {
     format!("{} h {:02} min", minutes / 60, minutes % 60)
 }
 
-/// The planned seconds of each experiment that `actual` (name, seconds of this run) timed,
-/// beside the actual ones; `None` when the plan covers none of them.
-pub fn comparison(plan: &Plan, actual: &[(String, f64)]) -> Option<Table> {
+/// The planned seconds of each experiment that `actual` (name, wall seconds of this run)
+/// timed, beside the seconds it took; `None` when the plan covers none of them. An image the
+/// plan counted in the experiment as not cached, and this run found cached (`earlier(stem)`:
+/// the seconds its report gives), was rendered after the plan by an earlier run (one stopped
+/// at a session's end, then resumed): its seconds count in the experiment's, and in a column
+/// of their own. The parts of an image in parts (see `Runner::parts`) that an earlier run
+/// left, and this run merged, do not count: their seconds are in neither run's total.
+pub fn comparison(
+    plan: &Plan,
+    actual: &[(String, f64)],
+    earlier: &dyn Fn(&str) -> Option<f64>,
+) -> Option<Table> {
     let mut table = Table::new(
         &format!(
             "Plan against run: estimated seconds (calibrated on {}, {} threads) and seconds taken",
             plan.machine.cpu, plan.machine.threads
         ),
-        &["experiment", "planned s", "actual s", "actual ÷ planned"],
+        &[
+            "experiment",
+            "planned s",
+            "actual s",
+            "from earlier runs",
+            "actual ÷ planned",
+        ],
     );
     for (name, seconds) in actual {
         if let Some(planned) = plan.experiments.iter().find(|e| &e.name == name) {
+            let before: f64 = plan
+                .items
+                .iter()
+                .filter(|i| &i.experiment == name && !i.cached)
+                .filter_map(|i| earlier(i.cache.as_deref()?))
+                // Not `sum`: the empty sum of f64 is −0, printed "-0.0".
+                .fold(0.0, |a, s| a + s);
+            let seconds = seconds + before;
             let ratio = if planned.seconds > 0.0 {
                 format!("{:.2}", seconds / planned.seconds)
             } else {
@@ -298,6 +321,7 @@ pub fn comparison(plan: &Plan, actual: &[(String, f64)]) -> Option<Table> {
                 name.clone(),
                 format!("{:.1}", planned.seconds),
                 format!("{seconds:.1}"),
+                format!("{before:.1}"),
                 ratio,
             ]);
         }
@@ -308,6 +332,48 @@ pub fn comparison(plan: &Plan, actual: &[(String, f64)]) -> Option<Table> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn images_an_earlier_run_rendered_after_the_plan_count_in_their_experiment() {
+        let item = |experiment: &str, stem: &str, cached: bool| PlanItem {
+            experiment: experiment.into(),
+            cache: Some(stem.into()),
+            cached,
+            ..PlanItem::default()
+        };
+        let plan = Plan {
+            items: vec![
+                item("a", "a1", false),
+                item("a", "a2", false),
+                item("a", "a3", true),
+                item("b", "b1", false),
+            ],
+            experiments: vec![
+                PlannedExperiment {
+                    name: "a".into(),
+                    seconds: 100.0,
+                    ..Default::default()
+                },
+                PlannedExperiment {
+                    name: "b".into(),
+                    seconds: 50.0,
+                    ..Default::default()
+                },
+            ],
+            ..Plan::default()
+        };
+        // a1 was rendered by an earlier run, a2 by this one, a3 was cached when planned (an
+        // older image, not counted); b1 by this run.
+        let earlier = |stem: &str| match stem {
+            "a1" => Some(30.0),
+            "a3" => Some(1000.0),
+            _ => None,
+        };
+        let actual = [("a".to_string(), 60.0), ("b".to_string(), 40.0)];
+        let table = comparison(&plan, &actual, &earlier).unwrap();
+        assert_eq!(table.rows[0], ["a", "100.0", "90.0", "30.0", "0.90"]);
+        assert_eq!(table.rows[1], ["b", "50.0", "40.0", "0.0", "0.80"]);
+    }
 
     #[test]
     fn the_calibration_shard_renders_about_eight_rows_spread_over_the_image() {

@@ -41,7 +41,8 @@ pub fn write(runner: &Runner) -> Result<()> {
         table.write(&runner.out, "plan_vs_actual")?;
         body += &html_table(&table);
         body += "<p>From <a href=\"plan.md\">plan.md</a>: each image's seconds count in the first experiment that needs it; \
-                 an experiment whose images an earlier run cached takes less than planned.</p>\n";
+                 an image the plan found cached costs nothing, and one an earlier run rendered after the plan (a run stopped, \
+                 then resumed) counts with the seconds its report gives.</p>\n";
     }
     for section in &runner.sections {
         let _ = writeln!(body, "<h2 id=\"{0}\">{0}</h2>", escape(&section.name));
