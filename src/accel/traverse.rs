@@ -29,6 +29,16 @@
 //! stratum's) ray hit, to seed `t`. Nearest-first order already reaches that leaf before any
 //! node it could cull: on `cube` (256 rays per point) 9.61 nodes per ray with or without it,
 //! and one more leaf block tested, so it was 5–10 % slower.
+//!
+//! Measured and not kept (2026-12-04): reading a hit's triangle index (`block_triangles`,
+//! another array than the block) only for ties of `t` and at the end, instead of at every
+//! hit. A profile of `cube` (one thread) put 3.6 % of its samples on that read, but the
+//! change moved nothing beyond the noise: `gather_rays cast`, 12 interleaved pairs on 2
+//! threads, ×1.01 on `cube` 256² × 256 (pairs ×0.95–1.08) and ×0.97 on `hall` 128² × 256
+//! (×0.86–1.23); `hmdist render` end to end, 5 runs each, medians ×0.96 on both. Where the
+//! time goes (same profile, `perf annotate`): no single place; the first loads of a leaf
+//! block ~9 % and of a node ~5 % (cache misses), the rest spread over box tests, triangle
+//! tests, sorting and the stacks.
 
 use std::mem::MaybeUninit;
 
