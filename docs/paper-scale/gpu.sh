@@ -11,7 +11,7 @@
 # the run stops cleanly after LIMIT seconds (default 420) and keeps the images it finished in
 # OUT/cache (large ones in parts), so running the script again continues where it stopped;
 # the run that finishes writes the report, and each experiment's planned and actual seconds
-# (OUT/plan_vs_actual.md). HMDIST_BIN names a prebuilt binary (the device machine may have no
+# (OUT/plan_vs_actual.md: the seconds of every call since the plan). HMDIST_BIN names a prebuilt binary (the device machine may have no
 # Rust toolchain or crates); otherwise the script builds one.
 #
 # Not yet run: no GPU machine has been lent to a session since it was written.
@@ -31,9 +31,15 @@ echo "hmdist: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)"
 common=(--scene cube --preset paper --backend gpu --out "$out" --quiet
         --reference docs/paper-scale/cube/reference.exr)
 
-# The plan first: a calibration of a few rows of every image (a few percent of the run).
+# The plan first: a calibration of a few rows of every image (a few percent of the run). Only
+# on the first call: a later one continues that run, and its plan against the run counts the
+# images the earlier calls rendered (a new plan would find them cached and count them as free).
 start=$(date +%s)
-timeout -s INT 120 "$bin" experiment all "${common[@]}" --plan && sed -n 1,16p "$out/plan.md"
+if [ -f "$out/plan.json" ]; then
+    echo "plan: $out/plan.md (made by the first call; remove $out/plan.json to plan again)"
+else
+    timeout -s INT 120 "$bin" experiment all "${common[@]}" --plan && sed -n 1,16p "$out/plan.md"
+fi
 left=$((limit - ($(date +%s) - start)))
 timeout -s INT "$left" "$bin" experiment all "${common[@]}"
 status=$?
