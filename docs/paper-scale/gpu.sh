@@ -11,8 +11,9 @@
 # the run stops cleanly after LIMIT seconds (default 420) and keeps the images it finished in
 # OUT/cache (large ones in parts), so running the script again continues where it stopped;
 # the run that finishes writes the report, and each experiment's planned and actual seconds
-# (OUT/plan_vs_actual.md: the seconds of every call since the plan). HMDIST_BIN names a prebuilt binary (the device machine may have no
-# Rust toolchain or crates); otherwise the script builds one.
+# (OUT/plan_vs_actual.md: the seconds of every call since the plan). HMDIST_BIN names a
+# prebuilt binary (the device machine may have no Rust toolchain or crates); otherwise the
+# script builds one.
 #
 # Not yet run: no GPU machine has been lent to a session since it was written.
 set -uo pipefail
