@@ -258,10 +258,14 @@ pub struct Runner<'a> {
     /// Wall seconds of each experiment this run ran, in order.
     pub timings: Vec<(String, f64)>,
     /// Each image this run asked for, at its first asking: `Some(the seconds its report
-    /// gives)` where the cache already held it, `None` where this run rendered it. What an
+    /// gives)` where the cache already held it, `None` where this run rendered it (or, where
+    /// it merged parts of it that an earlier run left, `Some(those parts' seconds)`). What an
     /// earlier run rendered after the plan (one stopped at a session's end, then resumed)
     /// counts in the plan against the run ([`plan::comparison`]).
     first_looks: RefCell<std::collections::HashMap<String, Option<f64>>>,
+    /// Per image rendered in parts, the seconds (by their reports) of the parts that this run
+    /// found cached: an earlier run's work, which this run's clock did not see.
+    earlier_parts: RefCell<std::collections::HashMap<String, f64>>,
     /// Images of at least this many rays are rendered in parts ([`PART_RAYS`]).
     part_rays: u64,
     /// The experiments this run runs.
@@ -319,6 +323,7 @@ impl<'a> Runner<'a> {
             planned: None,
             timings: vec![],
             first_looks: RefCell::default(),
+            earlier_parts: RefCell::default(),
             part_rays: PART_RAYS,
             running: vec![],
         })
@@ -520,12 +525,14 @@ impl<'a> Runner<'a> {
         })
     }
 
-    /// Notes the first asking for image `stem`: see [`Runner::first_looks`].
+    /// Notes the first asking for image `stem`: see [`Runner::first_looks`]. `None`: this run
+    /// rendered it, where some of its parts may have come from an earlier run.
     fn first_look(&self, stem: &str, cached_seconds: Option<f64>) {
+        let earlier = cached_seconds.or_else(|| self.earlier_parts.borrow().get(stem).copied());
         self.first_looks
             .borrow_mut()
             .entry(stem.to_string())
-            .or_insert(cached_seconds);
+            .or_insert(earlier);
     }
 
     /// The image method `method` (a registry name) renders with `params` (its parameter
@@ -781,7 +788,13 @@ impl<'a> Runner<'a> {
                 .map(|(exr_path, json_path)| read_cached(exr_path, json_path, &options.aovs))
                 .collect();
             let outputs = match cached {
-                Some(cached) => cached,
+                Some(cached) => {
+                    let mut earlier = self.earlier_parts.borrow_mut();
+                    for (stem, (_, report, _)) in stems.iter().zip(&cached) {
+                        *earlier.entry(stem.clone()).or_insert(0.0) += report.seconds.total;
+                    }
+                    cached
+                }
                 None => {
                     let options = RenderOptions {
                         shard: Some(Shard::new(k, count)?),
@@ -1093,4 +1106,64 @@ fn read_cached(
         .map(|a| exr::read_channel(exr_path, a.name()).ok())
         .collect::<Option<Vec<_>>>()?;
     Some((image, report, channels))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The parts of an image that an interrupted run cached count, in the run that finishes
+    /// the image, with the seconds their reports give; the parts this run renders do not.
+    #[test]
+    fn parts_an_earlier_run_left_count_with_their_reports_seconds() {
+        let out = std::env::temp_dir().join(format!("hmdist-earlier-parts-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&out);
+        let runner = Runner::new("slab", Preset::Quick, &out, &Silent)
+            .unwrap()
+            .with_size(Some(32))
+            .unwrap()
+            .with_part_rays(1);
+        let estimator = runner
+            .method_estimator("gather", &serde_json::json!({ "rays": 16 }), &[])
+            .unwrap();
+        let stem = runner.stem(estimator.as_ref(), 1, &[]);
+        let options = runner.render_options(1, &[]);
+        let one = |options: &RenderOptions| {
+            render(&runner.scene, estimator.as_ref(), options, &Silent).map(|r| vec![r])
+        };
+        // The first run stops after three parts.
+        let started = Cell::new(0);
+        let stopping = |options: &RenderOptions| {
+            started.set(started.get() + 1);
+            if started.get() > 3 {
+                return Err(Error::Interrupted);
+            }
+            one(options)
+        };
+        let stems = [stem.clone()];
+        assert!(runner
+            .render_outputs_in_parts(&[estimator.as_ref()], &stems, &options, &stopping)
+            .is_err());
+        let left: f64 = (0..3)
+            .map(|k| {
+                let (exr_path, json_path) = runner.cache_paths(&Runner::part_stem(&stem, k, PARTS));
+                read_cached(&exr_path, &json_path, &[]).unwrap().1.seconds.total
+            })
+            .sum();
+        assert!(left > 0.0);
+        assert!(
+            runner.earlier_parts.borrow().is_empty(),
+            "the first run found nothing cached"
+        );
+        // The next run renders the other parts, takes those three from the cache, and counts them.
+        runner
+            .render_outputs_in_parts(&[estimator.as_ref()], &stems, &options, &one)
+            .unwrap();
+        runner.first_look(&stem, None);
+        assert_eq!(runner.first_looks.borrow()[&stem], Some(left));
+        // An image rendered whole by this run owes nothing to an earlier one.
+        runner.first_look("another", None);
+        assert_eq!(runner.first_looks.borrow()["another"], None);
+        let _ = std::fs::remove_dir_all(&out);
+    }
 }

@@ -282,8 +282,8 @@ fn hours(seconds: f64) -> String {
 /// plan counted in the experiment as not cached, and this run found cached (`earlier(stem)`:
 /// the seconds its report gives), was rendered after the plan by an earlier run (one stopped
 /// at a session's end, then resumed): its seconds count in the experiment's, and in a column
-/// of their own. The parts of an image in parts (see `Runner::parts`) that an earlier run
-/// left, and this run merged, do not count: their seconds are in neither run's total.
+/// of their own. So do, for an image in parts (see `Runner::parts`) that this run finished,
+/// the parts an earlier run left (`earlier(stem)`: their reports' seconds).
 pub fn comparison(
     plan: &Plan,
     actual: &[(String, f64)],
