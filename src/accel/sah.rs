@@ -20,6 +20,7 @@ use obvhs::bvh2::node::Bvh2Node;
 use obvhs::bvh2::Bvh2;
 use obvhs::splits::split_aabbs_preset;
 use obvhs::triangle::Triangle;
+use rayon::prelude::*;
 
 /// Bins per axis.
 const BINS: usize = 32;
@@ -63,19 +64,25 @@ impl Reference {
 
 /// Builds the binary BVH of `triangles`, with spatial pre-splits where `pre_split`.
 pub fn build(triangles: &[Triangle], pre_split: bool) -> Bvh2 {
-    let mut boxes: Vec<Aabb> = triangles.iter().map(|t| t.aabb()).collect();
-    let mut indices: Vec<u32> = (0..triangles.len() as u32).collect();
-    if pre_split && !triangles.is_empty() {
+    let mut references: Vec<Reference> = if pre_split && !triangles.is_empty() {
+        let mut boxes: Vec<Aabb> = triangles.iter().map(|t| t.aabb()).collect();
+        let mut indices: Vec<u32> = (0..triangles.len() as u32).collect();
         let areas = boxes.iter().map(|b| b.half_area());
         let largest = areas.clone().fold(0.0f32, f32::max);
         let average = areas.sum::<f32>() / boxes.len() as f32;
         split_aabbs_preset(&mut boxes, &mut indices, triangles, average, largest);
-    }
-    let mut references: Vec<Reference> = boxes
-        .iter()
-        .zip(&indices)
-        .map(|(&bounds, &triangle)| Reference::new(bounds, triangle))
-        .collect();
+        boxes
+            .iter()
+            .zip(&indices)
+            .map(|(&bounds, &triangle)| Reference::new(bounds, triangle))
+            .collect()
+    } else {
+        triangles
+            .par_iter()
+            .enumerate()
+            .map(|(triangle, t)| Reference::new(t.aabb(), triangle as u32))
+            .collect()
+    };
     let n = references.len().max(1);
     // Zeroed by the allocator: the pages of the slots a leafy tree never uses (most of them)
     // are never touched.
@@ -87,7 +94,7 @@ pub fn build(triangles: &[Triangle], pre_split: bool) -> Bvh2 {
     }
     Bvh2 {
         nodes,
-        primitive_indices: references.iter().map(|r| r.triangle()).collect(),
+        primitive_indices: references.par_iter().map(|r| r.triangle()).collect(),
         ..Bvh2::default()
     }
 }
