@@ -32,6 +32,7 @@ pub(crate) mod float_error;
 mod kernel;
 #[cfg(target_arch = "x86_64")]
 mod packet;
+mod pages;
 mod sah;
 mod traverse;
 mod triangle;

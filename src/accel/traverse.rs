@@ -30,15 +30,16 @@
 //! node it could cull: on `cube` (256 rays per point) 9.61 nodes per ray with or without it,
 //! and one more leaf block tested, so it was 5–10 % slower.
 //!
-//! Measured and not kept (2026-12-04): reading a hit's triangle index (`block_triangles`,
-//! another array than the block) only for ties of `t` and at the end, instead of at every
-//! hit. A profile of `cube` (one thread) put 3.6 % of its samples on that read, but the
-//! change moved nothing beyond the noise: `gather_rays cast`, 12 interleaved pairs on 2
-//! threads, ×1.01 on `cube` 256² × 256 (pairs ×0.95–1.08) and ×0.97 on `hall` 128² × 256
-//! (×0.86–1.23); `hmdist render` end to end, 5 runs each, medians ×0.96 on both. Where the
-//! time goes (same profile, `perf annotate`): no single place; the first loads of a leaf
-//! block ~9 % and of a node ~5 % (cache misses), the rest spread over box tests, triangle
-//! tests, sorting and the stacks.
+//! A hit's triangle index (`block_triangles`, another array than the block) is read only to
+//! break a tie of `t` and by callers that need it, not at every hit: a distance-only gather
+//! never reads it. On `cube` and `hall` that moved nothing beyond the noise (12 interleaved
+//! pairs of `gather_rays cast`, 2 threads, ×1.01 and ×0.97), but in a large scene the read is
+//! a cache miss per hit: on the 5.2 M-triangle sphere of `benches/embree/compare.sh` a profile
+//! (one thread) put 9.5 % of the traversal's samples on it, and the trace went from 3.47 s to
+//! 3.27 s (medians of 5 interleaved runs, 2 threads). There the rest of the traversal's time
+//! is the first loads of nodes (~31 %) and of leaf blocks (~22 %); on `cube` no single place
+//! (leaf blocks ~9 %, nodes ~5 %, the rest spread over box and triangle tests, sorting and
+//! the stacks).
 
 use std::mem::MaybeUninit;
 
@@ -58,21 +59,25 @@ pub(crate) fn stack_size(depth: usize) -> usize {
     (WIDTH - 1) * depth + 1
 }
 
-/// The closest hit: leaf block, lane, distance and the triangle's index in the mesh.
+/// The closest hit: leaf block, lane and distance (the triangle's index in the mesh is
+/// `bvh.block_triangles[block][lane]`, read only where needed: in a large scene that array is
+/// one more cache miss per hit).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Closest {
     pub block: u32,
     pub lane: usize,
     pub t: f32,
-    pub triangle: u32,
 }
 
 impl Closest {
-    /// Whether a hit at `t` on `triangle` beats this one: nearer, or as near with a lower
-    /// triangle index (the rule that makes the answer independent of the visit order).
+    /// Whether a hit at `t` in `block`'s `lane` beats this one: nearer, or as near with a
+    /// lower triangle index (the rule that makes the answer independent of the visit order).
     #[inline(always)]
-    fn beaten_by(&self, t: f32, triangle: u32) -> bool {
-        t < self.t || (t == self.t && triangle < self.triangle)
+    fn beaten_by(&self, bvh: &WideBvh, t: f32, block: u32, lane: usize) -> bool {
+        t < self.t
+            || (t == self.t
+                && bvh.block_triangles[block as usize][lane]
+                    < bvh.block_triangles[self.block as usize][self.lane])
     }
 }
 
@@ -160,19 +165,13 @@ impl<'a> Search<'a> {
             if t > self.best_t {
                 continue;
             }
-            let triangle = bvh.block_triangles[block as usize][lane];
             let better = match self.best {
-                Some(best) => best.beaten_by(t, triangle),
+                Some(best) => best.beaten_by(bvh, t, block, lane),
                 None => t < self.t_max,
             };
             if better {
                 self.best_t = t;
-                self.best = Some(Closest {
-                    block,
-                    lane,
-                    t,
-                    triangle,
-                });
+                self.best = Some(Closest { block, lane, t });
             }
         }
         let mut doubtful = hits.within_error;
@@ -183,16 +182,10 @@ impl<'a> Search<'a> {
             if t >= self.t_max {
                 continue;
             }
-            let triangle = bvh.block_triangles[block as usize][lane];
-            if self.within_error.is_none_or(|w| w.beaten_by(t, triangle))
+            if self.within_error.is_none_or(|w| w.beaten_by(bvh, t, block, lane))
                 && (self.accept_within_error)(block, lane)
             {
-                self.within_error = Some(Closest {
-                    block,
-                    lane,
-                    t,
-                    triangle,
-                });
+                self.within_error = Some(Closest { block, lane, t });
             }
         }
     }

@@ -63,9 +63,6 @@ pub struct Block {
     pub corner: [[[f32; WIDTH]; 3]; 3],
 }
 
-// SAFETY: floats only, and all zeros is a valid value (a block of degenerate triangles).
-unsafe impl bytemuck::Zeroable for Block {}
-
 impl Block {
     /// The three corners of the triangle in `lane`.
     #[inline]
@@ -202,23 +199,32 @@ impl Collapse<'_> {
             depth: 1,
         };
         self.plan(root, &mut plan, 1);
-        // Zeroed by the allocator (no pass over the memory before the real one).
-        wide.blocks = bytemuck::zeroed_vec(plan.leaves.len());
-        wide.block_triangles = bytemuck::zeroed_vec(plan.leaves.len());
-        let mut leaf_bounds = vec![Aabb::INVALID; plan.leaves.len()];
-        wide.blocks
+        // Each block written once, in place, on memory advised to be huge pages.
+        let count = plan.leaves.len();
+        let mut blocks: Vec<Block> = super::pages::with_capacity(count);
+        let mut block_triangles: Vec<[u32; WIDTH]> = super::pages::with_capacity(count);
+        let mut leaf_bounds = vec![Aabb::INVALID; count];
+        blocks.spare_capacity_mut()[..count]
             .par_iter_mut()
-            .zip(&mut wide.block_triangles)
+            .zip(&mut block_triangles.spare_capacity_mut()[..count])
             .zip(&mut leaf_bounds)
             .zip(&plan.leaves)
             .for_each(|(((block, lanes), bounds), &leaf)| {
-                (*block, *lanes, *bounds) = self.leaf(leaf as usize);
+                let (b, l);
+                (b, l, *bounds) = self.leaf(leaf as usize);
+                block.write(b);
+                lanes.write(l);
             });
+        // SAFETY: the loop above wrote all `count` values of both.
+        unsafe {
+            blocks.set_len(count);
+            block_triangles.set_len(count);
+        }
         // Boxes bottom-up: a node's children come after it, so walk the nodes backwards.
         let mut node_bounds = vec![Aabb::INVALID; plan.nodes.len()];
-        let mut nodes = vec![empty_node(); plan.nodes.len()];
+        let mut nodes: Vec<Node> = super::pages::with_capacity(plan.nodes.len());
         for (position, planned) in plan.nodes.iter().enumerate().rev() {
-            let node = &mut nodes[position];
+            let mut node = empty_node();
             let mut bounds = Aabb::INVALID;
             for slot in 0..planned.count as usize {
                 let reference = planned.reference[slot];
@@ -227,11 +233,16 @@ impl Collapse<'_> {
                 } else {
                     node_bounds[reference as usize]
                 };
-                set_child(node, slot, reference, child_bounds);
+                set_child(&mut node, slot, reference, child_bounds);
                 bounds = bounds.union(&child_bounds);
             }
+            nodes.spare_capacity_mut()[position].write(node);
             node_bounds[position] = bounds;
         }
+        // SAFETY: the loop above wrote every position.
+        unsafe { nodes.set_len(plan.nodes.len()) };
+        wide.blocks = blocks;
+        wide.block_triangles = block_triangles;
         wide.nodes = nodes;
         wide.depth = plan.depth;
     }
