@@ -22,6 +22,8 @@ use obvhs::splits::split_aabbs_preset;
 use obvhs::triangle::Triangle;
 use rayon::prelude::*;
 
+use crate::scene::Mesh;
+
 /// Bins per axis.
 const BINS: usize = 32;
 /// Most triangles in a leaf: one block of the wide BVH.
@@ -62,25 +64,29 @@ impl Reference {
     }
 }
 
-/// Builds the binary BVH of `triangles`, with spatial pre-splits where `pre_split`.
-pub fn build(triangles: &[Triangle], pre_split: bool) -> Bvh2 {
-    let mut references: Vec<Reference> = if pre_split && !triangles.is_empty() {
+/// Builds the binary BVH of `mesh`'s triangles, with spatial pre-splits where `pre_split`.
+pub fn build(mesh: &Mesh, pre_split: bool) -> Bvh2 {
+    let mut references: Vec<Reference> = if pre_split && mesh.triangle_count() > 0 {
+        let triangles = obvhs_triangles(mesh);
         let mut boxes: Vec<Aabb> = triangles.iter().map(|t| t.aabb()).collect();
         let mut indices: Vec<u32> = (0..triangles.len() as u32).collect();
         let areas = boxes.iter().map(|b| b.half_area());
         let largest = areas.clone().fold(0.0f32, f32::max);
         let average = areas.sum::<f32>() / boxes.len() as f32;
-        split_aabbs_preset(&mut boxes, &mut indices, triangles, average, largest);
+        split_aabbs_preset(&mut boxes, &mut indices, &triangles, average, largest);
         boxes
             .iter()
             .zip(&indices)
             .map(|(&bounds, &triangle)| Reference::new(bounds, triangle))
             .collect()
     } else {
-        triangles
-            .par_iter()
-            .enumerate()
-            .map(|(triangle, t)| Reference::new(t.aabb(), triangle as u32))
+        // The box of the corners, as obvhs's `Triangle::aabb` makes it.
+        (0..mesh.triangle_count())
+            .into_par_iter()
+            .map(|i| {
+                let corners = mesh.triangle(i).map(Vec3A::from);
+                Reference::new(Aabb::from_points(&corners), i as u32)
+            })
             .collect()
     };
     let n = references.len().max(1);
@@ -97,6 +103,17 @@ pub fn build(triangles: &[Triangle], pre_split: bool) -> Bvh2 {
         primitive_indices: references.par_iter().map(|r| r.triangle()).collect(),
         ..Bvh2::default()
     }
+}
+
+/// The mesh's triangles as obvhs takes them (for its builders and spatial splits).
+pub(super) fn obvhs_triangles(mesh: &Mesh) -> Vec<Triangle> {
+    (0..mesh.triangle_count())
+        .into_par_iter()
+        .map(|i| {
+            let [v0, v1, v2] = mesh.triangle(i).map(Vec3A::from);
+            Triangle { v0, v1, v2 }
+        })
+        .collect()
 }
 
 /// The box of a set of references and the box of their (doubled) centroids.

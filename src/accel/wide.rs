@@ -30,7 +30,6 @@ use std::time::Duration;
 use glam::Vec3A;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::{builder::build_bvh2_from_tris, Bvh2};
-use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 
@@ -95,37 +94,31 @@ pub enum BinaryBuilder {
 impl WideBvh {
     /// Builds the binary BVH of `mesh` with `builder` and collapses it.
     pub fn build(mesh: &Mesh, builder: BinaryBuilder) -> WideBvh {
-        let triangles: Vec<Triangle> = (0..mesh.triangle_count())
-            .into_par_iter()
-            .map(|i| {
-                let [v0, v1, v2] = mesh.triangle(i).map(Vec3A::from);
-                Triangle { v0, v1, v2 }
-            })
-            .collect();
         let mut wide = WideBvh {
             nodes: Vec::new(),
             blocks: Vec::new(),
             block_triangles: Vec::new(),
             depth: 1,
         };
-        if triangles.is_empty() {
+        if mesh.triangle_count() == 0 {
             wide.nodes.push(empty_node());
             return wide;
         }
         let bvh2 = match builder {
-            BinaryBuilder::Sah { pre_split } => super::sah::build(&triangles, pre_split),
+            BinaryBuilder::Sah { pre_split } => super::sah::build(mesh, pre_split),
             BinaryBuilder::Obvhs(params) => {
                 let params = BvhBuildParams {
                     max_prims_per_leaf: params.max_prims_per_leaf.min(WIDTH as u32),
                     ..params
                 };
-                build_bvh2_from_tris(&triangles, params, &mut Duration::default())
+                build_bvh2_from_tris(
+                    &super::sah::obvhs_triangles(mesh),
+                    params,
+                    &mut Duration::default(),
+                )
             }
         };
-        let collapse = Collapse {
-            bvh2: &bvh2,
-            triangles: &triangles,
-        };
+        let collapse = Collapse { bvh2: &bvh2, mesh };
         let root = &bvh2.nodes[0];
         if root.prim_count > 0 {
             // A single leaf: one node whose only child is that leaf.
@@ -167,7 +160,7 @@ fn set_child(node: &mut Node, slot: usize, reference: u32, bounds: Aabb) {
 
 struct Collapse<'a> {
     bvh2: &'a Bvh2,
-    triangles: &'a [Triangle],
+    mesh: &'a Mesh,
 }
 
 /// A wide node of the collapse, before its boxes are known: what each child is (a wide node's
@@ -303,14 +296,14 @@ impl Collapse<'_> {
         let mut bounds = Aabb::INVALID;
         for lane in 0..WIDTH {
             let triangle = primitives[lane.min(primitives.len() - 1)];
-            let t = &self.triangles[triangle as usize];
-            for (k, v) in [t.v0, t.v1, t.v2].iter().enumerate() {
+            let corners = self.mesh.triangle(triangle as usize).map(Vec3A::from);
+            for (k, v) in corners.iter().enumerate() {
                 for axis in 0..3 {
                     block.corner[k][axis][lane] = v[axis];
                 }
             }
             lanes[lane] = triangle;
-            let tight = Aabb::from_points(&[t.v0, t.v1, t.v2]);
+            let tight = Aabb::from_points(&corners);
             bounds = bounds.union(&tight.intersection(&split_box));
         }
         (block, lanes, bounds)
