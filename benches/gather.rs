@@ -126,9 +126,15 @@ fn gpu() {
         };
         for rays in list("HMDIST_BENCH_GPU_RAYS", "256,4096") {
             let rays: u32 = rays.parse().expect("a ray count");
+            // On a software adapter (no hardware GPU) the `gpu` backend refuses to run.
+            let backend = if software {
+                hmdist::estimators::Backend::GpuSoftware
+            } else {
+                hmdist::estimators::Backend::Gpu
+            };
             let gather = Gather::new(rays, Weighting::Cosine)
                 .unwrap()
-                .with_backend(hmdist::estimators::Backend::Gpu);
+                .with_backend(backend);
             let start = Instant::now();
             let estimate = hmdist::render::estimate(&gather, &context, &gbuffer, &Silent).unwrap();
             let seconds = start.elapsed().as_secs_f64();
