@@ -7,9 +7,9 @@
 //! slower (PLOC's top levels suffer from large wall triangles). Top-down binned SAH gets
 //! within 3–8 % of the best tracing in about a tenth of the build time (`hall`: 0.24 s on 2
 //! cores; the whole build of 5.2 M triangles 2.4 s, 2.0 s since the collapse fills its blocks
-//! in parallel); see `cargo bench --bench gather`. obvhs's spatial pre-splits of large
-//! triangles can be added (`pre_split`); on `cube` and `hall` they did not pay, so the `fast`
-//! preset leaves them out.
+//! in parallel and the bins hold only boxes); see `cargo bench --bench gather`. obvhs's
+//! spatial pre-splits of large triangles can be added (`pre_split`); on `cube` and `hall`
+//! they did not pay, so the `fast` preset leaves them out.
 //!
 //! The tree is the same for any thread count: each node's references are partitioned in
 //! place by the same rule, and a subtree's nodes go to a range of the node array fixed by its

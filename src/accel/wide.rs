@@ -13,7 +13,7 @@
 //! blocks on all threads, each into its place, then the nodes' boxes bottom-up: the same
 //! bytes for any thread count. On the 5.2 M-triangle sphere of `benches/embree/compare.sh`
 //! that took the whole build from 3.05 s to 2.37 s (medians of 5 interleaved runs, 2
-//! threads; with the triangles and the SAH references also made in parallel). Collapsing the
+//! threads; with the SAH references also made in parallel). Collapsing the
 //! root's subtrees in parallel into vectors of their own and appending them was measured
 //! slower than one thread (3.3–3.6 s against 2.5–2.9 s), as each part's vectors grow and
 //! are copied again. Binning the top levels' references on several threads
@@ -163,18 +163,12 @@ struct Collapse<'a> {
     mesh: &'a Mesh,
 }
 
-/// A wide node of the collapse, before its boxes are known: what each child is (a wide node's
-/// index, or `LEAF | block`).
-#[derive(Clone, Copy)]
-struct Planned {
-    reference: [u32; WIDTH],
-    count: u8,
-}
-
 /// The shape of the wide BVH, in the order it is laid out: wide nodes depth-first (a node,
 /// then its subtrees in slot order), leaf blocks in the order the walk meets them.
 struct Plan {
-    nodes: Vec<Planned>,
+    /// Per wide node, before its boxes are known, what each child is: a wide node's index,
+    /// `LEAF | block`, or [`EMPTY`] after the last child.
+    nodes: Vec<[u32; WIDTH]>,
     /// The binary leaf that each block holds.
     leaves: Vec<u32>,
     depth: usize,
@@ -203,10 +197,10 @@ impl Collapse<'_> {
             .zip(&mut leaf_bounds)
             .zip(&plan.leaves)
             .for_each(|(((block, lanes), bounds), &leaf)| {
-                let (b, l);
-                (b, l, *bounds) = self.leaf(leaf as usize);
-                block.write(b);
-                lanes.write(l);
+                let (leaf_block, leaf_lanes, leaf_box) = self.leaf(leaf as usize);
+                block.write(leaf_block);
+                lanes.write(leaf_lanes);
+                *bounds = leaf_box;
             });
         // SAFETY: the loop above wrote all `count` values of both.
         unsafe {
@@ -216,11 +210,10 @@ impl Collapse<'_> {
         // Boxes bottom-up: a node's children come after it, so walk the nodes backwards.
         let mut node_bounds = vec![Aabb::INVALID; plan.nodes.len()];
         let mut nodes: Vec<Node> = super::pages::with_capacity(plan.nodes.len());
-        for (position, planned) in plan.nodes.iter().enumerate().rev() {
+        for (position, children) in plan.nodes.iter().enumerate().rev() {
             let mut node = empty_node();
             let mut bounds = Aabb::INVALID;
-            for slot in 0..planned.count as usize {
-                let reference = planned.reference[slot];
+            for (slot, &reference) in children.iter().take_while(|&&r| r != EMPTY).enumerate() {
                 let child_bounds = if reference & LEAF != 0 {
                     leaf_bounds[(reference & !LEAF) as usize]
                 } else {
@@ -266,13 +259,10 @@ impl Collapse<'_> {
             count += 1;
         }
         let position = plan.nodes.len();
-        let mut planned = Planned {
-            reference: [EMPTY; WIDTH],
-            count: count as u8,
-        };
+        let mut planned = [EMPTY; WIDTH];
         plan.nodes.push(planned);
         for (slot, &child) in children[..count].iter().enumerate() {
-            planned.reference[slot] = if self.bvh2.nodes[child].prim_count > 0 {
+            planned[slot] = if self.bvh2.nodes[child].prim_count > 0 {
                 plan.leaves.push(child as u32);
                 LEAF | (plan.leaves.len() - 1) as u32
             } else {
