@@ -7,15 +7,16 @@
 #   docs/paper-scale/gpu.sh [OUT]        # default: $OUT/paper-cube on the device machine,
 #                                        # else /tmp/paper-cube
 #
-# Written to fit the device machine's budget (one H100/H200 and 16 cores, under 8 minutes):
-# the run stops cleanly after LIMIT seconds (default 420) and keeps the images it finished in
+# It does not fit one lease of the device machine (15 minutes): on an H200 (2026-12-04) the
+# GPU cube map rasterises about 1,900 hemicubes/s, about 9 minutes per 1024² pass, and the
+# plan's calibration alone outran its 120 s (README.md beside this, "First run"). For the
+# figures that fit a lease, run gpu-figures.sh instead.
+# The run stops cleanly after LIMIT seconds (default 420) and keeps the images it finished in
 # OUT/cache (large ones in parts), so running the script again continues where it stopped;
 # the run that finishes writes the report, and each experiment's planned and actual seconds
 # (OUT/plan_vs_actual.md: the seconds of every call since the plan). HMDIST_BIN names a
 # prebuilt binary (the device machine may have no Rust toolchain or crates); otherwise the
 # script builds one.
-#
-# Not yet run: no GPU machine has been lent to a session since it was written.
 set -uo pipefail
 cd "$(dirname "$0")/../.."
 out="${1:-${OUT:-/tmp}/paper-cube}"

@@ -14,11 +14,17 @@
 // Differences from the CPU, all deliberate:
 // - Watertightness cannot rest on the CPU's exact expression order: a shader compiler may
 //   fuse a * b - c * d into a fused multiply-add, differently in two triangles that list a
-//   shared edge's vertices in opposite orders. So each edge function is evaluated with its two
-//   vertices in a fixed order (lexicographically smaller world position first) and negated
-//   where the triangle lists them the other way: the two triangles compute the same
-//   expression and get exactly negated values. Exact zeros are not refined in f64 (WGSL has
-//   no f64): a ray exactly through an edge then hits both triangles, never neither.
+//   shared edge's vertices in opposite orders, and differently at each place the expression
+//   is written. So each edge function is one expression, evaluated with its two vertices in a
+//   fixed order (lexicographically smaller world position first, chosen by select) and
+//   negated where the triangle lists them the other way, and every rounding in it and in the
+//   shear is pinned by an explicit fma: the two triangles compute the same operations on the
+//   same values and get exactly negated values, whatever the compiler fuses. (Before, the two
+//   orders were two expressions, `-(q.x * p.y - q.y * p.x)` one of them: NVIDIA's compiler
+//   fused them differently, and 450 of the 6.9e10 rays of `cube`'s 1024² x 65,536 reference
+//   slipped through edges on an H200, where lavapipe lets none through.) Exact zeros are not
+//   refined in f64 (WGSL has no f64): a ray exactly through an edge then hits both
+//   triangles, never neither.
 // - Divisions may be up to 2.5 ulp off on Vulkan, so the box test's far distance is widened
 //   by 1 + 2 gamma(8) rather than 1 + 2 gamma(3).
 // - The test for "coplanar with the triangle the ray leaves" runs in f32 with a looser
@@ -94,12 +100,14 @@ fn before(p: vec3<f32>, q: vec3<f32>) -> bool {
 }
 
 // The edge function of (p, q), 2D in the ray's sheared frame, evaluated in a fixed vertex
-// order so that the triangle on the edge's other side gets exactly its negation.
+// order so that the triangle on the edge's other side gets exactly its negation: one
+// expression on ordered operands, its rounding fixed by the fma (nothing left to fuse).
 fn edge(p: vec2<f32>, q: vec2<f32>, p_world: vec3<f32>, q_world: vec3<f32>) -> f32 {
-    if before(p_world, q_world) {
-        return p.x * q.y - p.y * q.x;
-    }
-    return -(q.x * p.y - q.y * p.x);
+    let p_first = before(p_world, q_world);
+    let u = select(q, p, p_first);
+    let v = select(p, q, p_first);
+    let e = fma(u.x, v.y, -(u.y * v.x));
+    return select(-e, e, p_first);
 }
 
 struct TriangleHit {
@@ -118,9 +126,11 @@ fn intersect(r: Ray, p0: vec3<f32>, p1: vec3<f32>, p2: vec3<f32>, t_max: f32) ->
     let az0 = a[r.kz];
     let bz0 = b[r.kz];
     let cz0 = c[r.kz];
-    let a2 = vec2(a[r.kx] + r.shear.x * az0, a[r.ky] + r.shear.y * az0);
-    let b2 = vec2(b[r.kx] + r.shear.x * bz0, b[r.ky] + r.shear.y * bz0);
-    let c2 = vec2(c[r.kx] + r.shear.x * cz0, c[r.ky] + r.shear.y * cz0);
+    // A shared vertex must shear to the same point in both of its triangles: fma, not a
+    // product and a sum the compiler may or may not fuse at each of the three.
+    let a2 = vec2(fma(r.shear.x, az0, a[r.kx]), fma(r.shear.y, az0, a[r.ky]));
+    let b2 = vec2(fma(r.shear.x, bz0, b[r.kx]), fma(r.shear.y, bz0, b[r.ky]));
+    let c2 = vec2(fma(r.shear.x, cz0, c[r.kx]), fma(r.shear.y, cz0, c[r.ky]));
     let e0 = edge(b2, c2, p1, p2);
     let e1 = edge(c2, a2, p2, p0);
     let e2 = edge(a2, b2, p0, p1);
