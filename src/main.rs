@@ -12,7 +12,7 @@ fn main() -> ExitCode {
     let runtime_dir = quiet_headless_vulkan();
     let signals = cli::signals::Signals::catch();
     let code = match cli::run(args) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => code,
         Err(hmdist::error::Error::Interrupted) => {
             let (status, name) = signals.interrupted_by();
             eprintln!("hmdist: interrupted by {name}: no output was written");

@@ -54,6 +54,10 @@ pub struct Comparison {
     pub rmse: f64,
     /// Mean of `|H − H_ref| / H_ref` (pixels with `H_ref = 0` left out of this one figure).
     pub mean_relative_error: f64,
+    /// Pixels whose values differ in their bits (`f32` bit patterns, every pixel, holes
+    /// included): 0 when the two images are the same bit for bit, what this project's
+    /// determinism promises (threads, kernels, BVH presets, shards).
+    pub differing: usize,
 }
 
 /// `f_diff` (SPEC §4) and the other figures of [`Comparison`].
@@ -75,6 +79,12 @@ pub fn compare(reference: &HmdImage, test: &HmdImage, l_diag: f32) -> Result<Com
         f_diff,
         rmse: mean(squares, f_diff.compared).sqrt(),
         mean_relative_error: mean(relative, relative_count),
+        differing: reference
+            .data
+            .iter()
+            .zip(&test.data)
+            .filter(|(r, t)| r.to_bits() != t.to_bits())
+            .count(),
     })
 }
 

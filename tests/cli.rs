@@ -404,7 +404,30 @@ fn diff_of_an_image_with_itself_is_zero_and_mismatched_sizes_exit_2() {
         "{text}"
     );
     assert!(text.contains("pixels compared:     192"), "{text}");
+    assert!(text.contains("bit for bit:         identical"), "{text}");
     assert!(dir.join("d.png").exists());
+    // --exact: status 0 for the same bits, 1 where one pixel is one ulp off (f_diff prints
+    // 0.000000 there: only the bit count tells), and the count names it.
+    let exact = hmdist(dir.path(), &["diff", "a.exr", "a.exr", "--exact"]);
+    assert_eq!(exact.status.code(), Some(0));
+    let mut image = hmdist::image::exr::read(&dir.join("a.exr")).unwrap();
+    image.data[100] = f32::from_bits(image.data[100].to_bits() + 1);
+    hmdist::image::exr::write(&image, &dir.join("c.exr")).unwrap();
+    std::fs::copy(dir.join("a.json"), dir.join("c.json")).unwrap();
+    for flags in [&[][..], &["--exact"][..]] {
+        let ulp = hmdist(dir.path(), &[&["diff", "a.exr", "c.exr"][..], flags].concat());
+        let text = String::from_utf8_lossy(&ulp.stdout);
+        assert!(text.contains("f_diff:              0.000000"), "{text}");
+        assert!(
+            text.contains("bit for bit:         1 of 192 pixels differ"),
+            "{text}"
+        );
+        assert_eq!(
+            ulp.status.code(),
+            Some(if flags.is_empty() { 0 } else { 1 }),
+            "{text}"
+        );
+    }
     let mismatch = hmdist(dir.path(), &["diff", "a.exr", "b.exr"]);
     assert_eq!(mismatch.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&mismatch.stderr).contains("differ in size"));

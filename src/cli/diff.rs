@@ -1,6 +1,8 @@
-//! `hmdist diff REF.exr TEST.exr`: f_diff (SPEC §4) and friends, and the difference picture.
+//! `hmdist diff REF.exr TEST.exr`: f_diff (SPEC §4) and friends, whether the two are the same
+//! bit for bit, and the difference picture.
 
 use std::path::{Path, PathBuf};
+use std::process::ExitCode;
 
 use clap::Args;
 
@@ -24,9 +26,13 @@ pub struct DiffArgs {
     /// Display scale s of the difference picture [default: the scene's].
     #[arg(long)]
     scale: Option<f32>,
+    /// Exit with status 1 unless the two images are the same bit for bit (as `cmp` does; for
+    /// scripts that check determinism: thread counts, kernels, shards, reruns).
+    #[arg(long)]
+    exact: bool,
 }
 
-pub fn run(args: DiffArgs) -> Result<()> {
+pub fn run(args: DiffArgs) -> Result<ExitCode> {
     let reference = exr::read(&args.reference)?;
     let test = exr::read(&args.test)?;
     let (l_diag, scene_scale) = match &args.scene {
@@ -43,12 +49,20 @@ pub fn run(args: DiffArgs) -> Result<()> {
     println!("pixels compared:     {}", c.f_diff.compared);
     println!("pixels excluded:     {}", c.f_diff.excluded);
     println!("l_diag:              {l_diag}");
+    match c.differing {
+        0 => println!("bit for bit:         identical"),
+        n => println!("bit for bit:         {n} of {} pixels differ", test.data.len()),
+    }
     if let Some(png) = &args.png {
         let scale = args.scale.unwrap_or(scene_scale);
         picture::write_png(&difference_picture(&reference, &test, scale), png)?;
         println!("difference picture:  {}", png.display());
     }
-    Ok(())
+    Ok(if args.exact && c.differing > 0 {
+        ExitCode::from(1)
+    } else {
+        ExitCode::SUCCESS
+    })
 }
 
 /// `l_diag` and the display scale from the JSON that `hmdist render` wrote beside `exr`.

@@ -1,7 +1,8 @@
 //! Command-line interface (SPEC §7, §8): flags become the library's configuration, results
 //! become files and one summary line. Every error is the user's: printed as one paragraph
 //! with parameters spelled as flags, exit status 2 (clap's own usage errors exit 2 as well);
-//! an interrupted run exits with 130 (Ctrl-C) or 143 (SIGTERM) ([`signals`]).
+//! an interrupted run exits with 130 (Ctrl-C) or 143 (SIGTERM) ([`signals`]); `diff --exact`
+//! exits with 1 where the two images are not the same bit for bit.
 
 mod bar;
 mod diff;
@@ -13,6 +14,8 @@ mod points;
 mod render;
 mod scene;
 pub mod signals;
+
+use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
@@ -61,21 +64,23 @@ enum Command {
     Gpu(gpu::GpuCommand),
 }
 
-pub fn run(cli: Cli) -> Result<()> {
+pub fn run(cli: Cli) -> Result<ExitCode> {
     #[cfg(feature = "gpu")]
     if let Some(selector) = &cli.gpu {
         hmdist::gpu::select_adapter(selector);
     }
-    match cli.command {
+    let done = match cli.command {
         Command::Render(args) => render::run(args),
         Command::Points(args) => points::run(args),
         Command::Merge(args) => merge::run(args),
         Command::Photons(command) => photons::run(command),
-        Command::Diff(args) => diff::run(args),
+        // `diff --exact` exits 1 where the images differ: an answer, not an error.
+        Command::Diff(args) => return diff::run(args),
         Command::Experiment(args) => experiment::run(args),
         Command::Scene(command) => scene::run(command),
         Command::Gpu(command) => gpu::run(command),
-    }
+    };
+    done.map(|()| ExitCode::SUCCESS)
 }
 
 /// The error as the person who typed the command should read it: library parameter names
