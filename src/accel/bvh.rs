@@ -218,8 +218,9 @@ impl Accel {
         if n >= 2 && matches!(self.kernel, Kernel::Avx2 | Kernel::Avx512) {
             use super::packet::{closest_packet_avx2, closest_packet_avx512, PacketEntry};
             use super::traverse::Search;
-            let rays: [RayData; PACKET] =
-                std::array::from_fn(|i| RayData::new(origins[i.min(n - 1)], directions[i.min(n - 1)]));
+            // SAFETY: both kernels imply AVX2, and `Kernel::best`/`with_kernel` only choose
+            // kernels the CPU has.
+            let rays: [RayData; PACKET] = unsafe { super::kernel::avx2::ray_packet(origins, directions) };
             let accept: [_; PACKET] = std::array::from_fn(|i| {
                 let leaving = leaving[i.min(n - 1)];
                 move |block: u32, lane: usize| self.may_take_within_error_hit(leaving, block, lane)
