@@ -6,7 +6,7 @@ mod common;
 use common::{add_square, gpu_or_skip};
 use glam::Vec3;
 use hmdist::error::Result;
-use hmdist::estimators::cubemap::Backend;
+use hmdist::estimators::cubemap::{Backend, GpuFill};
 use hmdist::estimators::{Cubemap, Estimator, Gather};
 use hmdist::image::HmdImage;
 use hmdist::metrics::f_diff;
@@ -189,6 +189,59 @@ fn gpu_backend_gives_exact_distances_and_agrees_with_cpu_on_cube() {
     );
     assert_eq!(d.excluded, 0);
     assert!(d.value < 0.01, "{}", d.value);
+}
+
+#[test]
+fn gpu_fill_by_rays_is_the_cpu_backends_cube_map() {
+    // `--gpu-fill rays`: the GPU gather's shader with each direction snapped to its texel's
+    // centre ray. The CPU backend computes the same thing in Rust (its own lookup and texel
+    // centres), so the two must agree to the GPU's rounding, and both differ from gather.
+    let test = "gpu_fill_by_rays_is_the_cpu_backends_cube_map";
+    let by_rays = |scene: &Scene, size: u32, rays: u32| {
+        let estimator = Cubemap::new(
+            Gather::new(rays, Weighting::Cosine).unwrap(),
+            16,
+            Backend::GpuSoftware,
+        )
+        .unwrap()
+        .with_gpu_fill(GpuFill::Rays);
+        common::render_square(scene, &estimator, size, RenderOptions::default())
+    };
+    // The box whose every texel holds the exact depth: H is gather's.
+    let box_scene = perpendicular_box(1.5);
+    let Some(exact) = gpu_or_skip(test, by_rays(&box_scene, 1, 4096)) else {
+        return;
+    };
+    let (gathered, _) = common::gather(&box_scene, 1, 1, 4096, Weighting::Cosine, None);
+    let error = relative_difference(&exact.image, &gathered);
+    println!("box by rays: |Δ|/H = {error:e}");
+    assert!(error < 1e-5, "{error}");
+
+    let scene = Scene::load("cube").unwrap();
+    let gpu = by_rays(&scene, 48, 64).unwrap();
+    let (cpu, _) = cubemap(&scene, 48, 64, 16, Backend::Cpu);
+    let (gathered, _) = common::gather(&scene, 48, 48, 64, Weighting::Cosine, None);
+    let against_cpu = f_diff(&cpu, &gpu.image, scene.diagonal()).unwrap();
+    let against_gather = f_diff(&gathered, &gpu.image, scene.diagonal()).unwrap();
+    println!(
+        "cube by rays: f_diff {:.6} against the CPU backend, {:.6} against gather",
+        against_cpu.value, against_gather.value
+    );
+    assert_eq!(against_cpu.excluded, 0);
+    assert!(against_cpu.value < 1e-4, "{}", against_cpu.value);
+    assert!(
+        against_gather.value > 100.0 * against_cpu.value.max(1e-6),
+        "{}",
+        against_gather.value
+    );
+    // What it reports: one ray per lookup, nothing rasterised, the fill named.
+    let report = &gpu.report;
+    let details = report.details.cubemap.as_ref().unwrap();
+    let surface = (48 * 48 - report.background_pixels) as u64;
+    assert_eq!(details.lookups, surface * 64);
+    assert_eq!(report.rays_cast, Some(surface * 64));
+    assert_eq!((details.texels_rasterised, details.escaped_lookups), (0, 0));
+    assert_eq!(report.parameters.cubemap.as_ref().unwrap().gpu_fill, "rays");
 }
 
 #[test]

@@ -3,7 +3,9 @@
 # start-up; the run takes about 2 minutes on an H200): the GPU's name, a smoke render, the GPU
 # part of `cargo bench --bench gather` (cube and hall, 1024² × 256 and 4,096), the paper's
 # reference (`cube` 1024² × 65,536 rays, --seed 1000003) on the GPU with its f_diff against the
-# committed CPU reference, and `cargo bench --bench cubemap` (64², cpu and gpu). Run it first
+# committed CPU reference, the cube map by rays at 1024² × 4,096 (`--gpu-fill rays`, built
+# 2026-12-04 after the H200 rasterised slowly; not yet run on a GPU), and `cargo bench --bench
+# cubemap` (64², cpu, gpu raster and gpu rays). Run it first
 # when a session is lent a GPU machine; README.md beside this has the 2026-12-04 H200 figures.
 #
 # The device machine has no Rust toolchain or crates: build here and carry the binaries, and
@@ -72,6 +74,11 @@ else
     echo "skipped the whole reference: projected $projected s, $(left) s left"
 fi
 
-step "cargo bench --bench cubemap (${CUBE_SIDE:-64}², R = 64; cpu and gpu)"
+step "cube map by rays (--gpu-fill rays): cube ${side}² × 4,096, R = 64"
+timeout 120 "$bin" render --method cubemap --scene cube --size "${side}x${side}" --rays 4096 --cube-res 64 \
+    --backend gpu --gpu-fill rays --out /tmp/cubemap_rays.exr --quiet 2>&1
+json /tmp/cubemap_rays.json
+
+step "cargo bench --bench cubemap (${CUBE_SIDE:-64}², R = 64; cpu, gpu raster and gpu rays)"
 HMDIST_BENCH_SIZE=${CUBE_SIDE:-64} timeout $(($(left) > 10 ? $(left) : 10)) "$bins/cubemap" 2>&1
 step "done"

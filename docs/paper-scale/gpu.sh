@@ -9,8 +9,10 @@
 #
 # It does not fit one lease of the device machine (15 minutes): on an H200 (2026-12-04) the
 # GPU cube map rasterises about 1,900 hemicubes/s, about 9 minutes per 1024² pass, and the
-# plan's calibration alone outran its 120 s (README.md beside this, "First run"). For the
-# figures that fit a lease, run gpu-figures.sh instead.
+# plan's calibration alone outran its 120 s (README.md beside this, "First run"). Since then
+# the cube maps are filled by rays (GPU_FILL, below), which should take them to seconds; the
+# photon studies (about 12 minutes of 16 cores) still do not fit. For the figures that fit a
+# lease, run gpu-figures.sh instead.
 # The run stops cleanly after LIMIT seconds (default 420) and keeps the images it finished in
 # OUT/cache (large ones in parts), so running the script again continues where it stopped;
 # the run that finishes writes the report, and each experiment's planned and actual seconds
@@ -30,7 +32,10 @@ echo "CPU: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | xargs), $(npro
 echo "hmdist: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)"
 # The committed CPU reference (1024² × 65,536 rays) is every f_diff's reference, as the CPU
 # run's: the GPU's images are measured against CPU final gathering, as in the paper's Fig. 9.
-common=(--scene cube --preset paper --backend gpu --out "$out" --quiet
+# GPU_FILL: how the cube maps fill their texels on the GPU. rays (the default here) casts a
+# ray per looked-up texel, at the gather's speed; raster is the paper's method, about 9
+# minutes per 1024² pass on an H200 (2026-12-04).
+common=(--scene cube --preset paper --backend gpu --gpu-fill "${GPU_FILL:-rays}" --out "$out" --quiet
         --reference docs/paper-scale/cube/reference.exr)
 
 # The plan first: a calibration of a few rows of every image (a few percent of the run). Only

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use hmdist::error::Result;
+use hmdist::estimators::cubemap::GpuFill;
 use hmdist::estimators::Backend;
 use hmdist::experiments::{select, Preset, Runner, EXPERIMENTS};
 use hmdist::shard::Shard;
@@ -38,6 +39,11 @@ pub struct ExperimentArgs {
     /// of the image cache's key.
     #[arg(long, value_enum, default_value_t = Backend::Auto)]
     backend: Backend,
+    /// How the cube map fills its texels on the GPU: raster (the paper's method) or rays
+    /// (a ray per looked-up texel; far faster on compute GPUs such as the H100/H200, which
+    /// rasterise slowly). Part of the cube maps' cache key where it is rays.
+    #[arg(long, value_enum, default_value_t = GpuFill::Raster)]
+    gpu_fill: GpuFill,
     /// Take the reference image (gather, the preset's reference rays, seed 1000003) from this
     /// EXR and the report beside it (same name, .json) instead of rendering it: refused
     /// unless the report says it is this run's reference (scene, size, parameters, version;
@@ -72,6 +78,7 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
     let bar = Bar::new(args.quiet);
     let mut runner = Runner::new(&args.scene, preset, &args.out, &bar)?
         .with_backend(args.backend)
+        .with_gpu_fill(args.gpu_fill)
         .with_kernel(hmdist::accel::Kernel::from_env()?)
         .with_size(args.size)?;
     if let Some(reference) = &args.reference {

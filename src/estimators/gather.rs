@@ -230,6 +230,7 @@ impl Gather {
             t_max: clamp.max,
             ao_radius,
             split: self.split,
+            cube_res: 0,
         }
     }
 

@@ -29,6 +29,7 @@ use std::time::Instant;
 
 use crate::accel::Kernel;
 use crate::error::{Error, Result};
+use crate::estimators::cubemap::GpuFill;
 use crate::estimators::{registry, Aov, AovImage, Backend, CubemapParams, Estimator};
 use crate::image::{exr, write_atomically, HmdImage};
 use crate::progress::{Progress, Silent};
@@ -249,6 +250,8 @@ pub struct Runner<'a> {
     shard: Option<ShardRun>,
     /// Where gather and the cube map run (every image's configuration gets it).
     backend: Backend,
+    /// How the cube map fills its texels on the GPU (every cube map's configuration gets it).
+    gpu_fill: GpuFill,
     /// The ray-casting kernel of every render (never changes an image).
     kernel: Kernel,
     /// Set for `experiment --plan`: calibrate instead of render.
@@ -318,6 +321,7 @@ impl<'a> Runner<'a> {
             cache: out.join("cache"),
             shard: None,
             backend: Backend::Auto,
+            gpu_fill: GpuFill::Raster,
             kernel: Kernel::best(),
             plan: None,
             planned: None,
@@ -386,6 +390,13 @@ impl<'a> Runner<'a> {
     /// part of the image cache's key: shards and the run that assembles them must agree.
     pub fn with_backend(self, backend: Backend) -> Self {
         Runner { backend, ..self }
+    }
+
+    /// This runner with the GPU's cube maps filled by `fill` (default: raster, the paper's
+    /// method; rays where the GPU rasterises slowly). Part of a cube map's cache key where it
+    /// is `rays`.
+    pub fn with_gpu_fill(self, gpu_fill: GpuFill) -> Self {
+        Runner { gpu_fill, ..self }
     }
 
     /// The options of an image of this run: the preset's size, `seed`, `aovs` and the
@@ -574,6 +585,10 @@ impl<'a> Runner<'a> {
         if entry.reads("backend") {
             let backend = serde_json::to_value(self.backend).expect("a backend serialises");
             params.insert("backend".into(), backend);
+        }
+        if entry.reads("gpu_fill") {
+            let fill = serde_json::to_value(self.gpu_fill).expect("a fill serialises");
+            params.insert("gpu_fill".into(), fill);
         }
         entry.build(&params, aovs)
     }
@@ -890,6 +905,7 @@ impl<'a> Runner<'a> {
         for config in configs {
             let cubemap = CubemapParams {
                 backend: self.backend,
+                gpu_fill: self.gpu_fill,
                 ..config.clone()
             }
             .build()?;

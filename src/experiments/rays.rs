@@ -116,13 +116,18 @@ fn ray_sweep(runner: &Runner) -> Result<RaySweep> {
     })
 }
 
-/// The backend a report says its image was made on (`?` for another shard's stand-in).
+/// The backend a report says its image was made on (`?` for another shard's stand-in), with
+/// `, rays` for a GPU cube map whose texels were filled by rays.
 fn backend_of(report: &crate::report::RenderReport) -> String {
-    report
+    let backend = report
         .details
         .device
         .as_ref()
-        .map_or("?".into(), |d| d.backend.clone())
+        .map_or("?".into(), |d| d.backend.clone());
+    match &report.parameters.cubemap {
+        Some(c) if c.gpu_fill == "rays" && backend == "gpu" => format!("{backend}, rays"),
+        _ => backend,
+    }
 }
 
 /// The label of the cube map's column: its resolution and backend, as rendered.

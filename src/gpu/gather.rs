@@ -48,7 +48,7 @@ struct Params {
     has_max: u32,
     has_ao: u32,
     ao_radius: f32,
-    padding: u32,
+    cube_res: u32,
 }
 
 /// `State` in `gather.wgsl`: escaped, dmin, AO open (value, carry), AO total (value,
@@ -84,7 +84,11 @@ pub(crate) struct GpuGather<T> {
 /// What to gather: `rays` rays per point as `rounds` rounds of stratified `weighting`
 /// directions (`gather`'s, see [`crate::estimators::Gather`]) with random numbers of `seed`;
 /// hits closer than `d_min` count as `d_min`, and hits beyond `t_max` (finite) as escapes
-/// at `t_max`; the `ao` AOV's figures where `ao_radius` is given.
+/// at `t_max`; the `ao` AOV's figures where `ao_radius` is given. With `cube_res` R > 0 it is
+/// the cube map by rays (`cubemap --gpu-fill rays`): each direction looks up its texel of a
+/// hemicube of resolution R, a ray through that texel's centre gives the depth the texel
+/// holds, and the distance is that depth along the direction (the CPU backend's arithmetic,
+/// `src/estimators/cubemap/cpu.rs`), clamped as gather's.
 #[derive(Clone, Copy)]
 pub(crate) struct GatherJob {
     pub rays: u32,
@@ -95,6 +99,7 @@ pub(crate) struct GatherJob {
     pub t_max: f32,
     pub ao_radius: Option<f32>,
     pub split: Option<DispatchSplit>,
+    pub cube_res: u32,
 }
 
 /// One point's figures as the GPU summed them.
@@ -138,7 +143,7 @@ pub(crate) fn gather_points<T>(
         has_max: job.t_max.is_finite() as u32,
         has_ao: job.ao_radius.is_some() as u32,
         ao_radius: job.ao_radius.unwrap_or(0.0),
-        padding: 0,
+        cube_res: job.cube_res,
     };
     let batch_points = job.split.map_or(MAX_POINTS, |s| s.points.clamp(1, MAX_POINTS)) as usize;
     // The shader indexes sums by `i·rounds + round` in u32, and each buffer must fit the
@@ -300,7 +305,7 @@ mod tests {
         ]
         .concat();
         let params = host_layout!(Params: count, first_ray, end_ray, per_round, rounds, grid_a, grid_b,
-            weighting, seed, d_min, t_max, has_max, has_ao, ao_radius, padding);
+            weighting, seed, d_min, t_max, has_max, has_ao, ao_radius, cube_res);
         assert_eq!(wgsl_struct_layout(&source, "GatherParams"), params);
         let state = host_layout!(State: escaped, dmin, ao_open, ao_total, rays, padding);
         assert_eq!(wgsl_struct_layout(&source, "State"), state);

@@ -20,7 +20,8 @@ struct GatherParams {
     has_max: u32,
     has_ao: u32,
     ao_radius: f32,
-    padding: u32,
+    // R > 0: the cube map by rays (see `texel`), else gather.
+    cube_res: u32,
 };
 
 // Where a point's rays start: origin.w is the triangle they leave (bit pattern, NONE for
@@ -55,6 +56,53 @@ fn kahan_add(sum: vec2<f32>, value: f32) -> vec2<f32> {
     return vec2(total, (total - sum.x) - y);
 }
 
+// A hemicube texel (src/estimators/cubemap/hemicube.rs, `lookup` and `texel_direction`, step
+// by step): the unit local direction through the centre of the texel that `w` falls in, its
+// component along the face's axis, and `w`'s.
+struct Texel {
+    centre: vec3<f32>,
+    centre_along: f32,
+    along: f32,
+};
+
+fn texel(w: vec3<f32>, r: u32) -> Texel {
+    let a = abs(w);
+    // The face: axis, and the in-plane directions u (across) and v (up; the normal on the
+    // side faces, whose rows count up from the horizon).
+    var axis = vec3(0.0, 0.0, 1.0);
+    var u = vec3(1.0, 0.0, 0.0);
+    var v = vec3(0.0, 1.0, 0.0);
+    let top = w.z >= a.x && w.z >= a.y;
+    if !top {
+        v = vec3(0.0, 0.0, 1.0);
+        if a.x >= a.y {
+            axis = vec3(sign_of(w.x), 0.0, 0.0);
+            u = vec3(0.0, sign_of(w.x), 0.0);
+        } else {
+            axis = vec3(0.0, sign_of(w.y), 0.0);
+            u = vec3(-sign_of(w.y), 0.0, 0.0);
+        }
+    }
+    let along = dot(w, axis);
+    let s = dot(w, u) / along;
+    let t = dot(w, v) / along;
+    let cols = 2u * r;
+    let rows = select(r, 2u * r, top);
+    // max(0): Rust's `as u32` saturates a slightly negative value to 0.
+    let col = min(u32(max((s + 1.0) * 0.5 * f32(cols), 0.0)), cols - 1u);
+    let row_f = select(t * f32(rows), (t + 1.0) * 0.5 * f32(rows), top);
+    let row = min(u32(max(row_f, 0.0)), rows - 1u);
+    let sc = (f32(col) + 0.5) / f32(cols) * 2.0 - 1.0;
+    let tc = select((f32(row) + 0.5) / f32(rows), (f32(row) + 0.5) / f32(rows) * 2.0 - 1.0, top);
+    let centre = normalize(axis + sc * u + tc * v);
+    return Texel(centre, dot(centre, axis), along);
+}
+
+// +1 for a positive x, else -1 (the face rule: `w.x > 0` picks +x).
+fn sign_of(x: f32) -> f32 {
+    return select(-1.0, 1.0, x > 0.0);
+}
+
 @compute @workgroup_size(64)
 fn gather(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = id.x + id.y * groups.x * 64u;
@@ -77,10 +125,30 @@ fn gather(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups)
             sum = sums[i * p.rounds + round];
         }
         let w = hemisphere(p.weighting, stratified(g - r * p.per_round, p.grid_a, p.grid_b, random_pair(p.seed, key, g)));
-        let direction = w.x * start.t.xyz + w.y * start.b.xyz + w.z * start.n.xyz;
-        let hit = closest_hit(start.origin.xyz, direction, p.t_max, leaving, &stack);
         state.rays++;
         var inverse = 0.0;
+        if p.cube_res > 0u {
+            // The cube map by rays: the texel's depth (its centre ray's t times the centre's
+            // component along the face axis), as a distance along w, clamped as gather's.
+            let x = texel(w, p.cube_res);
+            let c = x.centre;
+            let through = c.x * start.t.xyz + c.y * start.b.xyz + c.z * start.n.xyz;
+            let hit = closest_hit(start.origin.xyz, through, 3.4028235e38, leaving, &stack);
+            let d = hit.t * x.centre_along / x.along;
+            if hit.hit && (p.has_max == 0u || d <= p.t_max) {
+                state.dmin = min(state.dmin, d);
+                inverse = 1.0 / max(d, p.d_min);
+            } else {
+                state.escaped++;
+                if p.has_max != 0u {
+                    inverse = 1.0 / p.t_max;
+                }
+            }
+            sum = kahan_add(sum, inverse);
+            continue;
+        }
+        let direction = w.x * start.t.xyz + w.y * start.b.xyz + w.z * start.n.xyz;
+        let hit = closest_hit(start.origin.xyz, direction, p.t_max, leaving, &stack);
         if hit.hit {
             state.dmin = min(state.dmin, hit.t);
             inverse = 1.0 / max(hit.t, p.d_min);

@@ -7,7 +7,10 @@
 //!
 //! Backends: `cpu` fills texels by ray casting (a ray through the texel centre sees exactly
 //! what rasterisation stores there); `gpu` rasterises the faces with wgpu; `auto` takes a
-//! hardware GPU where there is one, else the CPU.
+//! hardware GPU where there is one, else the CPU. On the GPU, `--gpu-fill rays` fills each
+//! looked-up texel as the CPU does, by its centre ray, in the GPU gather's shader: for GPUs
+//! with little rasterising hardware (an H200 rasterised about 1,900 hemicubes/s at R = 64,
+//! slower than its node's CPU cores), where rays go at the gather's speed.
 
 mod cpu;
 pub mod hemicube;
@@ -27,6 +30,29 @@ pub use hemicube::{Face, Hemicube};
 pub const DEFAULT_CUBE_RES: u32 = 64;
 /// Largest `R` accepted: a 2R × 2R top face must fit a GPU texture comfortably.
 pub const MAX_CUBE_RES: u32 = 1024;
+
+/// How the GPU backend fills the hemicube texels that the directions look up.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum GpuFill {
+    /// Rasterise every texel of every pixel's hemicube (the paper's method).
+    #[default]
+    Raster,
+    /// Cast a ray through the centre of each texel a direction looks up, as the CPU backend
+    /// does: the cost of a gather with the same N, whatever R.
+    Rays,
+}
+
+impl GpuFill {
+    /// The name the CLI and the reports use.
+    pub fn name(self) -> &'static str {
+        match self {
+            GpuFill::Raster => "raster",
+            GpuFill::Rays => "rays",
+        }
+    }
+}
 
 /// `cubemap`'s parameters: the CLI's flags, Python's keywords and the registry's build all
 /// come from this one list.
@@ -49,6 +75,14 @@ pub struct CubemapParams {
     /// Where the hemicubes are built.
     #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Backend::Auto))]
     pub backend: Backend,
+    /// How the GPU fills the texels looked up: raster (every texel of every hemicube, the
+    /// paper's method) or rays (a ray through each looked-up texel's centre, as the CPU
+    /// backend; for compute GPUs with little rasterising hardware, such as the H100/H200).
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_enum, default_value_t = GpuFill::Raster, help_heading = "Cube map")
+    )]
+    pub gpu_fill: GpuFill,
 }
 
 impl Default for CubemapParams {
@@ -58,6 +92,7 @@ impl Default for CubemapParams {
             weighting: Weighting::default(),
             cube_res: DEFAULT_CUBE_RES,
             backend: Backend::default(),
+            gpu_fill: GpuFill::default(),
         }
     }
 }
@@ -67,11 +102,12 @@ impl super::params::MethodParams for CubemapParams {}
 impl CubemapParams {
     /// The cube map these parameters name, checked.
     pub fn build(&self) -> Result<Cubemap> {
-        Cubemap::new(
+        Ok(Cubemap::new(
             Gather::new(self.rays, self.weighting)?,
             self.cube_res,
             self.backend,
-        )
+        )?
+        .with_gpu_fill(self.gpu_fill))
     }
 }
 
@@ -80,6 +116,7 @@ pub struct Cubemap {
     gather: Gather,
     hemicube: Hemicube,
     backend: Backend,
+    gpu_fill: GpuFill,
 }
 
 impl Cubemap {
@@ -96,7 +133,17 @@ impl Cubemap {
             gather,
             hemicube: Hemicube { resolution },
             backend,
+            gpu_fill: GpuFill::Raster,
         })
+    }
+
+    /// The same cube map, its texels filled on the GPU by `fill` (the CPU backend always
+    /// casts rays).
+    pub fn with_gpu_fill(self, fill: GpuFill) -> Self {
+        Cubemap {
+            gpu_fill: fill,
+            ..self
+        }
     }
 
     /// The gather whose directions look the hemicube up.
@@ -138,6 +185,7 @@ impl Estimator for Cubemap {
         Parameters {
             cubemap: Some(CubemapParameters {
                 cube_res: self.hemicube.resolution,
+                gpu_fill: self.gpu_fill.name().into(),
             }),
             ..self.gather.parameters()
         }
@@ -145,8 +193,8 @@ impl Estimator for Cubemap {
 
     fn expected_rays(&self, pixels: u64) -> u64 {
         // The CPU backend casts at most one ray per gather direction (one per texel looked
-        // up); the GPU backend rasterises instead.
-        if self.backend.is_gpu() {
+        // up), the GPU's rays fill one per direction; rasterising casts none.
+        if self.backend.is_gpu() && self.gpu_fill == GpuFill::Raster {
             0
         } else {
             self.gather.expected_rays(pixels)
@@ -160,7 +208,15 @@ impl Estimator for Cubemap {
         progress: &dyn Progress,
     ) -> Result<Prepared<'a>> {
         #[cfg(feature = "gpu")]
-        if let Some(gpu) = self.gpu()? {
+        if self.gpu_fill == GpuFill::Rays {
+            let scene = crate::gpu::open_for(self.backend, |software| {
+                crate::gpu::GpuScene::new(context.accel, software)
+            })?;
+            if let Some(scene) = scene {
+                return estimate_by_rays_on_gpu(&scene, self, context, gbuffer, progress)
+                    .map(|e| Prepared::Done(Box::new(e)));
+            }
+        } else if let Some(gpu) = self.gpu()? {
             return estimate_on_gpu(&gpu, self, context, gbuffer, progress)
                 .map(|e| Prepared::Done(Box::new(e)));
         }
@@ -227,6 +283,74 @@ fn estimate_on_gpu(
                 texels_per_hemicube: cubemap.hemicube.texel_count() as u64,
                 lookups: pixels.len() as u64 * rays as u64,
                 escaped_lookups: done.escaped_lookups,
+            }),
+            ..Details::default()
+        },
+    })
+}
+
+/// The cube map on the GPU by rays (`--gpu-fill rays`): the GPU gather's shader with each
+/// direction snapped to its texel's centre ray ([`crate::gpu::gather::GatherJob::cube_res`]).
+/// `rays_cast` counts those rays (one per lookup: a texel two directions look up is cast
+/// twice, where the CPU backend casts it once), `escaped_lookups` the lookups whose distance
+/// passed `--max-distance` or found nothing, as on the CPU.
+#[cfg(feature = "gpu")]
+fn estimate_by_rays_on_gpu(
+    scene: &crate::gpu::GpuScene,
+    cubemap: &Cubemap,
+    context: &EstimateContext,
+    gbuffer: &GBuffer,
+    progress: &dyn Progress,
+) -> Result<super::Estimate> {
+    use crate::gpu::gather::{gather_points, GatherJob};
+    use crate::report::{CubemapDetails, Details, DeviceDetails, PhaseSeconds};
+
+    let (pixels, starts) = gbuffer.starts();
+    let gather = &cubemap.gather;
+    let job = GatherJob {
+        cube_res: cubemap.hemicube.resolution,
+        ..gather.gpu_job(context.seed, context.clamp, None)
+    };
+    let done = gather_points(
+        scene,
+        &job,
+        &starts,
+        |i| pixels[i] as u64,
+        progress,
+        |p| {
+            let escaped = p.escaped as u64;
+            (gather.point_from_gpu(None, p).mean.value(), escaped)
+        },
+    )?;
+    let mut hmd = vec![f32::NAN; gbuffer.points.len()];
+    let mut escaped = 0;
+    for (&pixel, &(h, e)) in pixels.iter().zip(&done.points) {
+        hmd[pixel] = h;
+        escaped += e;
+    }
+    let lookups = pixels.len() as u64 * gather.rays_per_point() as u64;
+    Ok(super::Estimate {
+        hmd,
+        rays: Some(super::RayCount {
+            cast: lookups,
+            escaped,
+            seconds: done.trace_seconds,
+        }),
+        aovs: vec![],
+        phases: PhaseSeconds {
+            gpu_upload: Some(scene.upload_seconds + done.upload_seconds),
+            gpu_trace: Some(done.trace_seconds),
+            gpu_readback: Some(done.readback_seconds),
+            ..PhaseSeconds::default()
+        },
+        details: Details {
+            device: Some(DeviceDetails::gpu(scene.adapter(), scene.device.software)),
+            grays_per_s: Some(lookups as f64 / done.trace_seconds.max(1e-9) / 1e9),
+            cubemap: Some(CubemapDetails {
+                texels_rasterised: 0,
+                texels_per_hemicube: cubemap.hemicube.texel_count() as u64,
+                lookups,
+                escaped_lookups: escaped,
             }),
             ..Details::default()
         },
