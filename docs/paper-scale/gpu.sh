@@ -45,7 +45,9 @@ start=$(date +%s)
 if [ -f "$out/plan.json" ]; then
     echo "plan: $out/plan.md (made by the first call; remove $out/plan.json to plan again)"
 else
-    timeout -s INT 120 "$bin" experiment all "${common[@]}" --plan && sed -n 1,16p "$out/plan.md"
+    # PLAN_LIMIT: the calibration's seconds (on the H200 it outran 120, mostly in the photon
+    # images, each of which builds its whole photon map).
+    timeout -s INT "${PLAN_LIMIT:-120}" "$bin" experiment all "${common[@]}" --plan && sed -n 1,16p "$out/plan.md"
 fi
 left=$((limit - ($(date +%s) - start)))
 timeout -s INT "$left" "$bin" experiment all "${common[@]}"
