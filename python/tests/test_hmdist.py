@@ -269,3 +269,22 @@ def test_adaptive_takes_its_sampler_and_both_tolerances_as_keywords():
     assert report["loosen"] == 1.0 and report["sampler"] == "sobol"
     with pytest.raises(ValueError, match="tolerance"):
         s.render(size=(4, 4), method="adaptive", tolerance=0.0)
+
+
+def test_the_cube_map_by_rays_is_a_keyword_and_agrees_with_the_cpu_backend():
+    # `gpu_fill` is one field of the cube map's parameter struct: the GPU (lavapipe in CI)
+    # fills the looked-up texels by rays, the CPU backend's image up to the GPU's rounding.
+    s = hmdist.Scene.builtin("cube")
+    params = dict(method="cubemap", size=(16, 16), rays=16, cube_res=8)
+    try:
+        by_rays, report = s.render(backend="gpu-software", gpu_fill="rays", **params)
+    except hmdist.DeviceError as e:
+        if os.environ.get("HMDIST_NO_SKIPS"):
+            raise
+        pytest.skip(f"no GPU adapter: {e}")
+    cpu, cpu_report = s.render(backend="cpu", **params)
+    assert report["gpu_fill"] == "rays" and "gpu_fill" not in cpu_report
+    assert report["rays_cast"] == 16 * 16 * 16
+    assert np.nanmax(np.abs(by_rays - cpu) / cpu) < 1e-4
+    with pytest.raises(ValueError, match="gpu_fill"):
+        s.render(size=(4, 4), method="cubemap", rays=4, gpu_fill="sideways")
