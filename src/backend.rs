@@ -1,4 +1,5 @@
-//! Where an estimator runs ([`Backend`]) and how GPU work is split ([`DispatchSplit`]):
+//! Where an estimator runs ([`Backend`]), how the cube map fills its texels there
+//! ([`GpuFill`]) and how GPU work is split ([`DispatchSplit`]):
 //! vocabulary shared by the estimators, which choose, and the GPU module ([`crate::gpu`],
 //! with the `gpu` feature), which opens the device. It exists with or without that feature.
 
@@ -22,6 +23,26 @@ pub enum Backend {
     /// The CPU: gather's rays by the SIMD kernels, the cube map by casting a ray through each
     /// texel looked up.
     Cpu,
+}
+
+/// How the cube map's GPU backend fills the hemicube texels that the directions look up.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum GpuFill {
+    /// Rasterise every texel of every pixel's hemicube (the paper's method).
+    #[default]
+    Raster,
+    /// Cast a ray through the centre of each texel a direction looks up, as the CPU backend
+    /// does: the cost of a gather with the same N, whatever R.
+    Rays,
+}
+
+impl GpuFill {
+    /// Whether this is the default, raster (reports leave it out then).
+    pub fn is_raster(&self) -> bool {
+        *self == GpuFill::Raster
+    }
 }
 
 impl Backend {

@@ -5,6 +5,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::backend::GpuFill;
 use crate::sampling::{Sampler, Weighting};
 use crate::scene::{Bounds, Camera, SpotLight};
 
@@ -413,20 +414,12 @@ pub struct GatherParameters {
 pub struct CubemapParameters {
     /// Per-quadrant resolution R.
     pub cube_res: u32,
-    /// How the GPU fills the texels looked up (`--gpu-fill`: `raster` or `rays`; the CPU
-    /// backend casts rays whatever it says). Written only where it is `rays`, so that a
-    /// raster cube map's report, and its experiment cache key, are what they were before the
-    /// choice existed; a report without it reads as `raster`.
-    #[serde(default = "raster", skip_serializing_if = "is_raster")]
-    pub gpu_fill: String,
-}
-
-fn raster() -> String {
-    "raster".into()
-}
-
-fn is_raster(fill: &str) -> bool {
-    fill == "raster"
+    /// How the GPU fills the texels looked up (`--gpu-fill`; the CPU backend casts rays
+    /// whatever it says). Written only where it is `rays`, so that a raster cube map's
+    /// report, and its experiment cache key, are what they were before the choice existed;
+    /// a report without it reads as `raster`.
+    #[serde(default, skip_serializing_if = "GpuFill::is_raster")]
+    pub gpu_fill: GpuFill,
 }
 
 /// The photon map and its gather.

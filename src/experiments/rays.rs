@@ -6,6 +6,7 @@ use super::paper;
 use super::plot::{log_log, Series};
 use super::{Runner, Section, Table, REFERENCE_SEED};
 use crate::error::Result;
+use crate::estimators::cubemap::GpuFill;
 use crate::estimators::{CubemapParams, GatherParams};
 use crate::image::picture::grey;
 use crate::image::HmdImage;
@@ -125,7 +126,7 @@ fn backend_of(report: &crate::report::RenderReport) -> String {
         .as_ref()
         .map_or("?".into(), |d| d.backend.clone());
     match &report.parameters.cubemap {
-        Some(c) if c.gpu_fill == "rays" && backend == "gpu" => format!("{backend}, rays"),
+        Some(c) if c.gpu_fill == GpuFill::Rays && backend == "gpu" => format!("{backend}, rays"),
         _ => backend,
     }
 }

@@ -279,7 +279,10 @@ fn edges_in_f64(lanes: u32, edges: [__m256; 3], sheared: [__m256; 6]) -> [__m256
 #[target_feature(enable = "avx2")]
 pub(crate) unsafe fn ray_packet(origins: &[glam::Vec3], directions: &[glam::Vec3]) -> [RayData; WIDTH] {
     let n = directions.len();
-    assert!((1..=WIDTH).contains(&n) && origins.len() == n);
+    debug_assert!(
+        (1..=WIDTH).contains(&n) && origins.len() == n,
+        "cast_packet checks"
+    );
     let mut lanes = [[0.0f32; WIDTH]; 3];
     for i in 0..WIDTH {
         let d = directions[i.min(n - 1)];

@@ -16,7 +16,7 @@ mod cpu;
 pub mod hemicube;
 
 use super::{EstimateContext, Estimator, GBuffer, Gather, Prepared};
-pub use crate::backend::Backend;
+pub use crate::backend::{Backend, GpuFill};
 use crate::error::{Error, Result};
 #[cfg(feature = "gpu")]
 use crate::gpu::hemicube::HemicubeGpu;
@@ -30,29 +30,6 @@ pub use hemicube::{Face, Hemicube};
 pub const DEFAULT_CUBE_RES: u32 = 64;
 /// Largest `R` accepted: a 2R × 2R top face must fit a GPU texture comfortably.
 pub const MAX_CUBE_RES: u32 = 1024;
-
-/// How the GPU backend fills the hemicube texels that the directions look up.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
-#[serde(rename_all = "lowercase")]
-pub enum GpuFill {
-    /// Rasterise every texel of every pixel's hemicube (the paper's method).
-    #[default]
-    Raster,
-    /// Cast a ray through the centre of each texel a direction looks up, as the CPU backend
-    /// does: the cost of a gather with the same N, whatever R.
-    Rays,
-}
-
-impl GpuFill {
-    /// The name the CLI and the reports use.
-    pub fn name(self) -> &'static str {
-        match self {
-            GpuFill::Raster => "raster",
-            GpuFill::Rays => "rays",
-        }
-    }
-}
 
 /// `cubemap`'s parameters: the CLI's flags, Python's keywords and the registry's build all
 /// come from this one list.
@@ -185,7 +162,7 @@ impl Estimator for Cubemap {
         Parameters {
             cubemap: Some(CubemapParameters {
                 cube_res: self.hemicube.resolution,
-                gpu_fill: self.gpu_fill.name().into(),
+                gpu_fill: self.gpu_fill,
             }),
             ..self.gather.parameters()
         }
