@@ -15,9 +15,11 @@
 //!   triangle test, no ray slips through a closed mesh.
 
 use std::mem::MaybeUninit;
+use std::sync::atomic::{AtomicU32, Ordering};
 
 use glam::{DVec3, Vec3, Vec3A};
 use obvhs::BvhBuildParams;
+use rayon::prelude::*;
 
 use super::kernel::{Kernel, RayData};
 use super::traverse::{closest, stack_size, Closest, Counter, Entry, TraversalStats};
@@ -112,12 +114,21 @@ impl Accel {
     /// never reads `HMDIST_KERNEL`: the CLI and Python do ([`Kernel::from_env`]).
     pub fn build(mesh: &Mesh, quality: BuildQuality) -> Accel {
         let bvh = WideBvh::build(mesh, quality.builder());
-        let mut location = vec![0u32; mesh.triangle_count()];
-        for (block, lanes) in bvh.block_triangles.iter().enumerate() {
-            for (lane, &triangle) in lanes.iter().enumerate() {
-                location[triangle as usize] = (block * WIDTH + lane) as u32;
-            }
-        }
+        // Filled on all threads; where several lanes hold a triangle (a block's spare lanes,
+        // or spatial splits) the last of them, as one thread in block order would leave it.
+        let location: Vec<AtomicU32> = (0..mesh.triangle_count())
+            .into_par_iter()
+            .map(|_| AtomicU32::new(0))
+            .collect();
+        bvh.block_triangles
+            .par_iter()
+            .enumerate()
+            .for_each(|(block, lanes)| {
+                for (lane, &triangle) in lanes.iter().enumerate() {
+                    location[triangle as usize].fetch_max((block * WIDTH + lane) as u32, Ordering::Relaxed);
+                }
+            });
+        let location = location.into_iter().map(AtomicU32::into_inner).collect();
         Accel {
             bvh,
             kernel: Kernel::best(),
@@ -416,6 +427,28 @@ mod tests {
         assert!(accel
             .hit_distance(Vec3::ZERO, Vec3::X, f32::INFINITY, None)
             .is_finite());
+    }
+
+    #[test]
+    fn each_triangle_is_located_in_the_last_lane_that_holds_it_for_any_thread_count() {
+        // 81,920 triangles, so blocks are filled on several threads; with spatial splits a
+        // triangle can sit in several blocks, and a short block repeats its last triangle.
+        let mesh = crate::scene::procedural::shapes::icosphere(6, glam::Vec3::ZERO, 1.0);
+        for quality in [BuildQuality::Fast, BuildQuality::High] {
+            let mut serial = vec![u32::MAX; mesh.triangle_count()];
+            let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+            let accel = one.install(|| Accel::build(&mesh, quality));
+            for (block, lanes) in accel.bvh.block_triangles.iter().enumerate() {
+                for (lane, &triangle) in lanes.iter().enumerate() {
+                    serial[triangle as usize] = (block * WIDTH + lane) as u32;
+                }
+            }
+            assert!(serial.iter().all(|&l| l != u32::MAX));
+            assert!(accel.location == serial, "{quality:?}: one thread");
+            let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+            let accel = three.install(|| Accel::build(&mesh, quality));
+            assert!(accel.location == serial, "{quality:?}: three threads");
+        }
     }
 
     #[test]

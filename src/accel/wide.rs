@@ -312,15 +312,40 @@ mod tests {
     use super::*;
     use crate::scene::procedural::shapes::icosphere;
 
+    /// 65 × 65 small triangles on a unit lattice: their doubled centroids `(2i, 2j)` fall
+    /// exactly on bin edges (32 bins over a span of 128), where binning and partitioning must
+    /// agree on the side.
+    fn lattice() -> Mesh {
+        let mut mesh = Mesh::new();
+        for i in 0..65 {
+            for j in 0..65 {
+                let (x, y) = (i as f32, j as f32);
+                let first = mesh.add_vertices([
+                    glam::Vec3::new(x - 0.25, y - 0.25, 0.0),
+                    glam::Vec3::new(x + 0.25, y - 0.25, 0.0),
+                    glam::Vec3::new(x, y + 0.25, 0.0),
+                ]);
+                mesh.add_triangle(first, first + 1, first + 2);
+            }
+        }
+        mesh
+    }
+
     #[test]
     fn every_triangle_is_in_a_leaf_inside_every_box_above_it() {
-        let mesh = icosphere(3, glam::Vec3::new(0.3, -0.2, 0.1), 2.0);
-        for (builder, pre_split) in [
-            (BinaryBuilder::Sah { pre_split: false }, false),
-            (BinaryBuilder::Sah { pre_split: true }, true),
-            (BinaryBuilder::Obvhs(BvhBuildParams::very_slow_build()), true),
+        let sphere = icosphere(3, glam::Vec3::new(0.3, -0.2, 0.1), 2.0);
+        let lattice = lattice();
+        for (mesh, builder, pre_split) in [
+            (&lattice, BinaryBuilder::Sah { pre_split: false }, false),
+            (&sphere, BinaryBuilder::Sah { pre_split: false }, false),
+            (&sphere, BinaryBuilder::Sah { pre_split: true }, true),
+            (
+                &sphere,
+                BinaryBuilder::Obvhs(BvhBuildParams::very_slow_build()),
+                true,
+            ),
         ] {
-            let wide = WideBvh::build(&mesh, builder);
+            let wide = WideBvh::build(mesh, builder);
             let mut seen = vec![false; mesh.triangle_count()];
             // Walk the tree, checking each child's box contains what is below it.
             let mut stack = vec![(0u32, Aabb::LARGEST)];
