@@ -34,6 +34,7 @@ mod kernel;
 mod packet;
 mod pages;
 mod sah;
+mod slots;
 mod traverse;
 mod triangle;
 pub(crate) mod wide;

@@ -24,6 +24,8 @@ use obvhs::splits::split_aabbs_preset;
 use obvhs::triangle::Triangle;
 use rayon::prelude::*;
 
+use super::slots::{self, SlotCosts};
+use super::WIDTH;
 use crate::scene::Mesh;
 
 /// Most bins per axis; a node of `n` references uses [`bins_for`]`(n)` of them.
@@ -66,8 +68,9 @@ impl Reference {
     }
 }
 
-/// Builds the binary BVH of `mesh`'s triangles, with spatial pre-splits where `pre_split`.
-pub fn build(mesh: &Mesh, pre_split: bool) -> Bvh2 {
+/// Builds the binary BVH of `mesh`'s triangles, with spatial pre-splits where `pre_split`,
+/// and each node's collapse costs ([`slots`]), by node index, computed as its subtree is built.
+pub fn build(mesh: &Mesh, pre_split: bool) -> (Bvh2, Vec<SlotCosts>) {
     let mut references: Vec<Reference> = if pre_split && mesh.triangle_count() > 0 {
         let triangles = obvhs_triangles(mesh);
         let mut boxes: Vec<Aabb> = triangles.iter().map(|t| t.aabb()).collect();
@@ -95,15 +98,44 @@ pub fn build(mesh: &Mesh, pre_split: bool) -> Bvh2 {
     // Zeroed by the allocator: the pages of the slots a leafy tree never uses (most of them)
     // are never touched.
     let mut nodes: Vec<Bvh2Node> = bytemuck::zeroed_vec(2 * n - 1);
+    // Zeroed too: a leaf's costs are zero.
+    let mut costs: Vec<SlotCosts> = bytemuck::zeroed_vec(2 * n - 1);
     if !references.is_empty() {
         let extent = Extent::of(&references);
         let (root, below) = nodes.split_at_mut(1);
-        subtree(&mut references, extent, 0, &mut root[0], below, 1);
+        let (root_costs, below_costs) = costs.split_at_mut(1);
+        subtree(
+            &mut references,
+            extent,
+            0,
+            Slot(&mut root[0], &mut root_costs[0]),
+            Below(below, below_costs),
+            1,
+        );
     }
-    Bvh2 {
+    let bvh = Bvh2 {
         nodes,
         primitive_indices: references.par_iter().map(|r| r.triangle()).collect(),
         ..Bvh2::default()
+    };
+    (bvh, costs)
+}
+
+/// A node's place in the node array and in the costs array.
+struct Slot<'a>(&'a mut Bvh2Node, &'a mut SlotCosts);
+
+/// The places of a subtree's descendants in both arrays.
+struct Below<'a>(&'a mut [Bvh2Node], &'a mut [SlotCosts]);
+
+impl<'a> Below<'a> {
+    fn split_at(self, at: usize) -> (Below<'a>, Below<'a>) {
+        let (nodes_a, nodes_b) = self.0.split_at_mut(at);
+        let (costs_a, costs_b) = self.1.split_at_mut(at);
+        (Below(nodes_a, costs_a), Below(nodes_b, costs_b))
+    }
+
+    fn first(self) -> Slot<'a> {
+        Slot(&mut self.0[0], &mut self.1[0])
     }
 }
 
@@ -144,54 +176,47 @@ impl Extent {
 }
 
 /// Builds the subtree of `references` (which start at `offset` in the final reference order,
-/// and span `extent`) into `node`, its descendants into `below`, whose first slot has index
-/// `base` in the node array. `below` holds at least `2·len − 2` slots: a binary tree over `len`
-/// references needs no more.
+/// and span `extent`) into `slot`, its descendants into `below`, whose first slot has index
+/// `base` in the node array, and returns its node's collapse costs (also left in `slot`).
+/// `below` holds at least `2·len − 2` slots: a binary tree over `len` references needs no more.
 fn subtree(
     references: &mut [Reference],
     extent: Extent,
     offset: usize,
-    node: &mut Bvh2Node,
-    below: &mut [Bvh2Node],
+    slot: Slot,
+    below: Below,
     base: usize,
-) {
+) -> SlotCosts {
     let Some(split) = best_split(references, extent) else {
-        *node = Bvh2Node::new(extent.bounds, references.len() as u32, offset as u32);
-        return;
+        *slot.0 = Bvh2Node::new(extent.bounds, references.len() as u32, offset as u32);
+        *slot.1 = [0.0; WIDTH];
+        return *slot.1;
     };
     let left_len = split.left_len;
-    *node = Bvh2Node::new(extent.bounds, 0, base as u32);
-    let (children, rest) = below.split_at_mut(2);
-    let (left_children, right_children) = children.split_at_mut(1);
-    let (left_below, right_below) = rest.split_at_mut(2 * left_len - 2);
+    *slot.0 = Bvh2Node::new(extent.bounds, 0, base as u32);
+    let (children, rest) = below.split_at(2);
+    let (left_child, right_child) = children.split_at(1);
+    let (left_below, right_below) = rest.split_at(2 * left_len - 2);
     let (left, right) = references.split_at_mut(left_len);
     let right_len = right.len();
-    let mut left_job = || {
-        subtree(
-            left,
-            split.left,
-            offset,
-            &mut left_children[0],
-            left_below,
-            base + 2,
-        )
-    };
-    let mut right_job = || {
+    let left_job = || subtree(left, split.left, offset, left_child.first(), left_below, base + 2);
+    let right_job = || {
         subtree(
             right,
             split.right,
             offset + left_len,
-            &mut right_children[0],
+            right_child.first(),
             right_below,
             base + 2 + 2 * left_len - 2,
         )
     };
-    if left_len.min(right_len) >= PARALLEL_REFERENCES {
-        rayon::join(left_job, right_job);
+    let (left_costs, right_costs) = if left_len.min(right_len) >= PARALLEL_REFERENCES {
+        rayon::join(left_job, right_job)
     } else {
-        left_job();
-        right_job();
-    }
+        (left_job(), right_job())
+    };
+    *slot.1 = slots::inner(extent.bounds.half_area(), &left_costs, &right_costs);
+    *slot.1
 }
 
 /// A chosen split: how many references go left (they are moved to the front) and the extent
