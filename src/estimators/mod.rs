@@ -66,6 +66,17 @@ impl GBuffer {
         (self.points.len() - self.background_pixels()) as u64
     }
 
+    /// The image of `values`, one per pixel of `pixels` (surface pixels, as [`GBuffer::starts`]
+    /// lists them), NaN elsewhere.
+    #[cfg(feature = "gpu")]
+    pub(crate) fn image_of(&self, pixels: &[usize], values: impl IntoIterator<Item = f32>) -> Vec<f32> {
+        let mut image = vec![f32::NAN; self.points.len()];
+        for (&pixel, value) in pixels.iter().zip(values) {
+            image[pixel] = value;
+        }
+        image
+    }
+
     /// The surface pixels' indices and the starts of their gather rays (or hemicubes), in
     /// pixel order: what the GPU backends take.
     #[cfg(feature = "gpu")]

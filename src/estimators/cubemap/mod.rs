@@ -123,6 +123,23 @@ impl Cubemap {
         }
     }
 
+    /// The report's cube-map figures for `surface` surface pixels: every direction looks up
+    /// one texel.
+    #[cfg(feature = "gpu")]
+    fn details(
+        &self,
+        surface: usize,
+        texels_rasterised: u64,
+        escaped_lookups: u64,
+    ) -> crate::report::CubemapDetails {
+        crate::report::CubemapDetails {
+            texels_rasterised,
+            texels_per_hemicube: self.hemicube.texel_count() as u64,
+            lookups: surface as u64 * self.gather.rays_per_point() as u64,
+            escaped_lookups,
+        }
+    }
+
     /// The gather whose directions look the hemicube up.
     pub fn gather(&self) -> &Gather {
         &self.gather
@@ -225,14 +242,13 @@ fn estimate_on_gpu(
     progress: &dyn Progress,
 ) -> Result<super::Estimate> {
     use crate::gpu::hemicube::{look_up, HemicubeJob};
-    use crate::report::{CubemapDetails, Details, DeviceDetails, PhaseSeconds};
+    use crate::report::{Details, DeviceDetails, PhaseSeconds};
 
     let (pixels, starts) = gbuffer.starts();
-    let rays = cubemap.gather.rays_per_point();
     let job = HemicubeJob {
         mesh: &context.scene.mesh,
         resolution: cubemap.hemicube.resolution,
-        rays,
+        rays: cubemap.gather.rays_per_point(),
         weighting: cubemap.gather.weighting(),
         seed: context.seed,
         d_min: context.clamp.min,
@@ -240,12 +256,9 @@ fn estimate_on_gpu(
         far: 4.0 * context.scene.diagonal() + 1.0,
     };
     let done = look_up(gpu, &job, &starts, |i| pixels[i] as u32, progress)?;
-    let mut hmd = vec![f32::NAN; gbuffer.points.len()];
-    for (&pixel, h) in pixels.iter().zip(done.hmd) {
-        hmd[pixel] = h;
-    }
+    let texels = pixels.len() as u64 * cubemap.hemicube.texel_count() as u64;
     Ok(super::Estimate {
-        hmd,
+        hmd: gbuffer.image_of(&pixels, done.hmd),
         rays: None,
         aovs: vec![],
         phases: PhaseSeconds {
@@ -255,12 +268,7 @@ fn estimate_on_gpu(
         },
         details: Details {
             device: Some(DeviceDetails::gpu(&gpu.adapter_name, gpu.software)),
-            cubemap: Some(CubemapDetails {
-                texels_rasterised: pixels.len() as u64 * cubemap.hemicube.texel_count() as u64,
-                texels_per_hemicube: cubemap.hemicube.texel_count() as u64,
-                lookups: pixels.len() as u64 * rays as u64,
-                escaped_lookups: done.escaped_lookups,
-            }),
+            cubemap: Some(cubemap.details(pixels.len(), texels, done.escaped_lookups)),
             ..Details::default()
         },
     })
@@ -280,7 +288,7 @@ fn estimate_by_rays_on_gpu(
     progress: &dyn Progress,
 ) -> Result<super::Estimate> {
     use crate::gpu::gather::{gather_points, GatherJob};
-    use crate::report::{CubemapDetails, Details, DeviceDetails, PhaseSeconds};
+    use crate::report::{Details, DeviceDetails, PhaseSeconds};
 
     let (pixels, starts) = gbuffer.starts();
     let gather = &cubemap.gather;
@@ -299,15 +307,11 @@ fn estimate_by_rays_on_gpu(
             (gather.point_from_gpu(None, p).mean.value(), escaped)
         },
     )?;
-    let mut hmd = vec![f32::NAN; gbuffer.points.len()];
-    let mut escaped = 0;
-    for (&pixel, &(h, e)) in pixels.iter().zip(&done.points) {
-        hmd[pixel] = h;
-        escaped += e;
-    }
-    let lookups = pixels.len() as u64 * gather.rays_per_point() as u64;
+    let escaped = done.points.iter().map(|&(_, e)| e).sum();
+    let details = cubemap.details(pixels.len(), 0, escaped);
+    let lookups = details.lookups;
     Ok(super::Estimate {
-        hmd,
+        hmd: gbuffer.image_of(&pixels, done.points.iter().map(|&(h, _)| h)),
         rays: Some(super::RayCount {
             cast: lookups,
             escaped,
@@ -323,12 +327,7 @@ fn estimate_by_rays_on_gpu(
         details: Details {
             device: Some(DeviceDetails::gpu(scene.adapter(), scene.device.software)),
             grays_per_s: Some(lookups as f64 / done.trace_seconds.max(1e-9) / 1e9),
-            cubemap: Some(CubemapDetails {
-                texels_rasterised: 0,
-                texels_per_hemicube: cubemap.hemicube.texel_count() as u64,
-                lookups,
-                escaped_lookups: escaped,
-            }),
+            cubemap: Some(details),
             ..Details::default()
         },
     })
