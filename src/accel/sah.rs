@@ -98,7 +98,7 @@ pub fn build(mesh: &Mesh, pre_split: bool) -> (Bvh2, Vec<SlotCosts>) {
     // Zeroed by the allocator: the pages of the slots a leafy tree never uses (most of them,
     // at the end of each subtree's range: see `subtree`) are never touched.
     let mut nodes: Vec<Bvh2Node> = bytemuck::zeroed_vec(2 * n - 1);
-    // Zeroed too: a leaf's costs are zero.
+    // Zeroed like the nodes, so the pages of the slots never used are never touched.
     let mut costs: Vec<SlotCosts> = bytemuck::zeroed_vec(2 * n - 1);
     if !references.is_empty() {
         let extent = Extent::of(&references);
