@@ -173,6 +173,28 @@ fn packets_give_single_ray_hits_in_hall() {
     packets_match_single_rays("hall", &scene.mesh, &|a| primary(a, &scene, 64), 256);
 }
 
+/// At many rays per point a packet's rays are close enough in direction for the coherent path
+/// of `packet.rs` (inner children by the packet's interval test alone, leaf corners translated
+/// once for the packet): 16 points of `cube` at the reference's 65,536 rays, 64 of `hall` at
+/// 4,096 (where some packets take it and some do not).
+#[test]
+fn packets_give_single_ray_hits_at_many_rays_per_point() {
+    let scene = Scene::load("cube").unwrap();
+    packets_match_single_rays(
+        "cube, 65,536 rays",
+        &scene.mesh,
+        &|a| primary(a, &scene, 4),
+        65_536,
+    );
+    let scene = Scene::load("hall").unwrap();
+    packets_match_single_rays(
+        "hall, 4,096 rays",
+        &scene.mesh,
+        &|a| primary(a, &scene, 16),
+        4_096,
+    );
+}
+
 #[test]
 fn packets_give_single_ray_hits_in_a_closed_sphere() {
     // 20,480 triangles; gather points where rays from inside meet the sphere.

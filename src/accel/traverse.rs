@@ -61,7 +61,7 @@
 
 use std::mem::MaybeUninit;
 
-use super::kernel::{Lanes, RayData, FAR_SCALE};
+use super::kernel::{BlockHits, Lanes, RayData, FAR_SCALE};
 use super::wide::{WideBvh, EMPTY, LEAF, WIDTH};
 
 /// A traversal stack entry: a child reference and its near distance.
@@ -173,8 +173,20 @@ impl<'a> Search<'a> {
     ) {
         let block = reference & !LEAF;
         counter.block();
-        // Widened: a hit whose `t` equals the best one must reach the exact comparison below.
-        let hits = K::block(&bvh.blocks[block as usize], ray, self.best_t * FAR_SCALE);
+        let hits = K::block(&bvh.blocks[block as usize], ray, self.leaf_limit());
+        self.take(bvh, block, hits);
+    }
+
+    /// The `t_max` of a leaf block test: the best `t`, widened so that a hit whose `t`
+    /// equals it reaches the exact comparison of [`Search::take`].
+    #[inline(always)]
+    pub fn leaf_limit(&self) -> f32 {
+        self.best_t * FAR_SCALE
+    }
+
+    /// Keeps what the test of leaf block `block` (its index) found, if it beats the best.
+    #[inline(always)]
+    pub fn take(&mut self, bvh: &WideBvh, block: u32, hits: BlockHits) {
         let mut solid = hits.hit & !hits.within_error;
         while solid != 0 {
             let lane = solid.trailing_zeros() as usize;

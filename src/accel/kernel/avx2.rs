@@ -71,15 +71,35 @@ unsafe fn slab(node: &Node, ray: &RayData, row: usize, axis: usize) -> __m256 {
     )
 }
 
-/// Corner `k` of the eight triangles, translated to the ray origin, permuted so that the
-/// ray's dominant axis is z, and sheared in x and y onto +z (z is scaled later, as in the
-/// scalar test).
+/// The eight triangles' corners translated to the ray origin, in the ray's permuted axes
+/// (`[corner][kx, ky, kz]`): the part of the block test that depends on the ray only through
+/// its origin and axis permutation, so that rays which share both can share it.
 #[inline(always)]
-unsafe fn sheared_corner(block: &Block, ray: &RayData, origin: [__m256; 3], k: usize) -> [__m256; 3] {
+pub(crate) unsafe fn translated(block: &Block, ray: &RayData) -> [[__m256; 3]; 3] {
+    let [ox, oy, oz] = ray.permuted_origin;
+    let origin = [splat(ox), splat(oy), splat(oz)];
+    [
+        translated_corner(block, ray, origin, 0),
+        translated_corner(block, ray, origin, 1),
+        translated_corner(block, ray, origin, 2),
+    ]
+}
+
+/// Corner `k` of [`translated`].
+#[inline(always)]
+unsafe fn translated_corner(block: &Block, ray: &RayData, origin: [__m256; 3], k: usize) -> [__m256; 3] {
     let r = &ray.triangle;
-    let x = _mm256_sub_ps(_mm256_load_ps(block.corner[k][r.kx].as_ptr()), origin[0]);
-    let y = _mm256_sub_ps(_mm256_load_ps(block.corner[k][r.ky].as_ptr()), origin[1]);
-    let z = _mm256_sub_ps(_mm256_load_ps(block.corner[k][r.kz].as_ptr()), origin[2]);
+    [
+        _mm256_sub_ps(_mm256_load_ps(block.corner[k][r.kx].as_ptr()), origin[0]),
+        _mm256_sub_ps(_mm256_load_ps(block.corner[k][r.ky].as_ptr()), origin[1]),
+        _mm256_sub_ps(_mm256_load_ps(block.corner[k][r.kz].as_ptr()), origin[2]),
+    ]
+}
+
+/// A translated corner sheared in x and y onto +z (z is scaled later, as in the scalar test).
+#[inline(always)]
+unsafe fn sheared([x, y, z]: [__m256; 3], ray: &RayData) -> [__m256; 3] {
+    let r = &ray.triangle;
     [
         _mm256_add_ps(x, _mm256_mul_ps(splat(r.sx), z)),
         _mm256_add_ps(y, _mm256_mul_ps(splat(r.sy), z)),
@@ -131,117 +151,122 @@ impl Lanes for Avx2 {
     #[inline(always)]
     fn block(block: &Block, ray: &RayData, t_max: f32) -> BlockHits {
         // SAFETY: as in `node`; the block is 32-byte aligned.
-        unsafe {
-            let r = &ray.triangle;
-            let [ox, oy, oz] = ray.permuted_origin();
-            let origin = [splat(ox), splat(oy), splat(oz)];
-            let [ax, ay, az] = sheared_corner(block, ray, origin, 0);
-            let [bx, by, bz] = sheared_corner(block, ray, origin, 1);
-            let [cx, cy, cz] = sheared_corner(block, ray, origin, 2);
-            let mut e0 = edge(bx, by, cx, cy);
-            let mut e1 = edge(cx, cy, ax, ay);
-            let mut e2 = edge(ax, ay, bx, by);
-            let zero = _mm256_setzero_ps();
-            let exact_zero = mask(_mm256_or_ps(
-                _mm256_or_ps(
-                    _mm256_cmp_ps::<_CMP_EQ_OQ>(e0, zero),
-                    _mm256_cmp_ps::<_CMP_EQ_OQ>(e1, zero),
-                ),
-                _mm256_cmp_ps::<_CMP_EQ_OQ>(e2, zero),
-            ));
-            if exact_zero != 0 {
-                [e0, e1, e2] = edges_in_f64(exact_zero, [e0, e1, e2], [ax, ay, bx, by, cx, cy]);
-            }
-            let negative = _mm256_or_ps(
-                _mm256_or_ps(
-                    _mm256_cmp_ps::<_CMP_LT_OQ>(e0, zero),
-                    _mm256_cmp_ps::<_CMP_LT_OQ>(e1, zero),
-                ),
-                _mm256_cmp_ps::<_CMP_LT_OQ>(e2, zero),
-            );
-            let positive = _mm256_or_ps(
-                _mm256_or_ps(
-                    _mm256_cmp_ps::<_CMP_GT_OQ>(e0, zero),
-                    _mm256_cmp_ps::<_CMP_GT_OQ>(e1, zero),
-                ),
-                _mm256_cmp_ps::<_CMP_GT_OQ>(e2, zero),
-            );
-            let det = _mm256_add_ps(_mm256_add_ps(e0, e1), e2);
-            let sz = splat(r.sz);
-            let (az, bz, cz) = (
-                _mm256_mul_ps(az, sz),
-                _mm256_mul_ps(bz, sz),
-                _mm256_mul_ps(cz, sz),
-            );
-            let t_scaled = _mm256_add_ps(
-                _mm256_add_ps(_mm256_mul_ps(e0, az), _mm256_mul_ps(e1, bz)),
-                _mm256_mul_ps(e2, cz),
-            );
-            let t_max_det = _mm256_mul_ps(splat(t_max), det);
-            let det_negative = _mm256_cmp_ps::<_CMP_LT_OQ>(det, zero);
-            let outside_negative = _mm256_or_ps(
-                _mm256_cmp_ps::<_CMP_GE_OQ>(t_scaled, zero),
-                _mm256_cmp_ps::<_CMP_LT_OQ>(t_scaled, t_max_det),
-            );
-            let outside_positive = _mm256_or_ps(
-                _mm256_cmp_ps::<_CMP_LE_OQ>(t_scaled, zero),
-                _mm256_cmp_ps::<_CMP_GT_OQ>(t_scaled, t_max_det),
-            );
-            let outside = _mm256_blendv_ps(outside_positive, outside_negative, det_negative);
-            let miss = _mm256_or_ps(
-                _mm256_or_ps(
-                    _mm256_and_ps(negative, positive),
-                    _mm256_cmp_ps::<_CMP_EQ_OQ>(det, zero),
-                ),
-                outside,
-            );
-            let hit = !mask(miss) & 0xff;
-            let mut hits = BlockHits {
-                hit,
-                within_error: 0,
-                t: [0.0; WIDTH],
-            };
-            if hit == 0 {
-                return hits;
-            }
-            let inv_det = _mm256_div_ps(splat(1.0), det);
-            let t = _mm256_mul_ps(t_scaled, inv_det);
-            _mm256_storeu_ps(hits.t.as_mut_ptr(), t);
+        unsafe { block_translated(translated(block, ray), ray, t_max) }
+    }
+}
 
-            // The error bound of t (pbrt-v4 §6.8.7), as in `WatertightRay::intersect`.
-            let max_zt = max_abs(az, bz, cz);
-            let max_xt = max_abs(ax, bx, cx);
-            let max_yt = max_abs(ay, by, cy);
-            let delta_z = _mm256_mul_ps(splat(gamma(3)), max_zt);
-            let delta_x = _mm256_mul_ps(splat(gamma(5)), _mm256_add_ps(max_xt, max_zt));
-            let delta_y = _mm256_mul_ps(splat(gamma(5)), _mm256_add_ps(max_yt, max_zt));
-            let delta_e = _mm256_mul_ps(
-                splat(2.0),
+/// [`Lanes::block`] of the block whose corners [`translated`] gave for this ray's origin and
+/// axis permutation.
+#[inline(always)]
+pub(crate) unsafe fn block_translated(corners: [[__m256; 3]; 3], ray: &RayData, t_max: f32) -> BlockHits {
+    {
+        let r = &ray.triangle;
+        let [ax, ay, az] = sheared(corners[0], ray);
+        let [bx, by, bz] = sheared(corners[1], ray);
+        let [cx, cy, cz] = sheared(corners[2], ray);
+        let mut e0 = edge(bx, by, cx, cy);
+        let mut e1 = edge(cx, cy, ax, ay);
+        let mut e2 = edge(ax, ay, bx, by);
+        let zero = _mm256_setzero_ps();
+        let exact_zero = mask(_mm256_or_ps(
+            _mm256_or_ps(
+                _mm256_cmp_ps::<_CMP_EQ_OQ>(e0, zero),
+                _mm256_cmp_ps::<_CMP_EQ_OQ>(e1, zero),
+            ),
+            _mm256_cmp_ps::<_CMP_EQ_OQ>(e2, zero),
+        ));
+        if exact_zero != 0 {
+            [e0, e1, e2] = edges_in_f64(exact_zero, [e0, e1, e2], [ax, ay, bx, by, cx, cy]);
+        }
+        let negative = _mm256_or_ps(
+            _mm256_or_ps(
+                _mm256_cmp_ps::<_CMP_LT_OQ>(e0, zero),
+                _mm256_cmp_ps::<_CMP_LT_OQ>(e1, zero),
+            ),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(e2, zero),
+        );
+        let positive = _mm256_or_ps(
+            _mm256_or_ps(
+                _mm256_cmp_ps::<_CMP_GT_OQ>(e0, zero),
+                _mm256_cmp_ps::<_CMP_GT_OQ>(e1, zero),
+            ),
+            _mm256_cmp_ps::<_CMP_GT_OQ>(e2, zero),
+        );
+        let det = _mm256_add_ps(_mm256_add_ps(e0, e1), e2);
+        let sz = splat(r.sz);
+        let (az, bz, cz) = (
+            _mm256_mul_ps(az, sz),
+            _mm256_mul_ps(bz, sz),
+            _mm256_mul_ps(cz, sz),
+        );
+        let t_scaled = _mm256_add_ps(
+            _mm256_add_ps(_mm256_mul_ps(e0, az), _mm256_mul_ps(e1, bz)),
+            _mm256_mul_ps(e2, cz),
+        );
+        let t_max_det = _mm256_mul_ps(splat(t_max), det);
+        let det_negative = _mm256_cmp_ps::<_CMP_LT_OQ>(det, zero);
+        let outside_negative = _mm256_or_ps(
+            _mm256_cmp_ps::<_CMP_GE_OQ>(t_scaled, zero),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(t_scaled, t_max_det),
+        );
+        let outside_positive = _mm256_or_ps(
+            _mm256_cmp_ps::<_CMP_LE_OQ>(t_scaled, zero),
+            _mm256_cmp_ps::<_CMP_GT_OQ>(t_scaled, t_max_det),
+        );
+        let outside = _mm256_blendv_ps(outside_positive, outside_negative, det_negative);
+        let miss = _mm256_or_ps(
+            _mm256_or_ps(
+                _mm256_and_ps(negative, positive),
+                _mm256_cmp_ps::<_CMP_EQ_OQ>(det, zero),
+            ),
+            outside,
+        );
+        let hit = !mask(miss) & 0xff;
+        let mut hits = BlockHits {
+            hit,
+            within_error: 0,
+            t: [0.0; WIDTH],
+        };
+        if hit == 0 {
+            return hits;
+        }
+        let inv_det = _mm256_div_ps(splat(1.0), det);
+        let t = _mm256_mul_ps(t_scaled, inv_det);
+        _mm256_storeu_ps(hits.t.as_mut_ptr(), t);
+
+        // The error bound of t (pbrt-v4 §6.8.7), as in `WatertightRay::intersect`.
+        let max_zt = max_abs(az, bz, cz);
+        let max_xt = max_abs(ax, bx, cx);
+        let max_yt = max_abs(ay, by, cy);
+        let delta_z = _mm256_mul_ps(splat(gamma(3)), max_zt);
+        let delta_x = _mm256_mul_ps(splat(gamma(5)), _mm256_add_ps(max_xt, max_zt));
+        let delta_y = _mm256_mul_ps(splat(gamma(5)), _mm256_add_ps(max_yt, max_zt));
+        let delta_e = _mm256_mul_ps(
+            splat(2.0),
+            _mm256_add_ps(
+                _mm256_add_ps(
+                    _mm256_mul_ps(_mm256_mul_ps(splat(gamma(2)), max_xt), max_yt),
+                    _mm256_mul_ps(delta_y, max_xt),
+                ),
+                _mm256_mul_ps(delta_x, max_yt),
+            ),
+        );
+        let max_e = max_abs(e0, e1, e2);
+        let delta_t = _mm256_mul_ps(
+            _mm256_mul_ps(
+                splat(3.0),
                 _mm256_add_ps(
                     _mm256_add_ps(
-                        _mm256_mul_ps(_mm256_mul_ps(splat(gamma(2)), max_xt), max_yt),
-                        _mm256_mul_ps(delta_y, max_xt),
+                        _mm256_mul_ps(_mm256_mul_ps(splat(gamma(3)), max_e), max_zt),
+                        _mm256_mul_ps(delta_e, max_zt),
                     ),
-                    _mm256_mul_ps(delta_x, max_yt),
+                    _mm256_mul_ps(delta_z, max_e),
                 ),
-            );
-            let max_e = max_abs(e0, e1, e2);
-            let delta_t = _mm256_mul_ps(
-                _mm256_mul_ps(
-                    splat(3.0),
-                    _mm256_add_ps(
-                        _mm256_add_ps(
-                            _mm256_mul_ps(_mm256_mul_ps(splat(gamma(3)), max_e), max_zt),
-                            _mm256_mul_ps(delta_e, max_zt),
-                        ),
-                        _mm256_mul_ps(delta_z, max_e),
-                    ),
-                ),
-                abs(inv_det),
-            );
-            hits.within_error = mask(_mm256_cmp_ps::<_CMP_LE_OQ>(t, delta_t)) & hit;
-            hits
-        }
+            ),
+            abs(inv_det),
+        );
+        hits.within_error = mask(_mm256_cmp_ps::<_CMP_LE_OQ>(t, delta_t)) & hit;
+        hits
     }
 }
 
@@ -324,15 +349,17 @@ pub(crate) unsafe fn ray_packet(origins: &[glam::Vec3], directions: &[glam::Vec3
             (y_wins >> i & 1) as usize
         };
         let kx = if kz == 2 { 0 } else { kz + 1 };
+        let ky = if kx == 2 { 0 } else { kx + 1 };
         RayData {
             origin: origin.to_array(),
             inv_direction: [inv[0][i], inv[1][i], inv[2][i]],
             near_row,
             far_row: near_row.map(|row| (row + 3) % 6),
+            permuted_origin: [origin[kx], origin[ky], origin[kz]],
             triangle: crate::accel::triangle::WatertightRay {
                 origin: origin.into(),
                 kx,
-                ky: if kx == 2 { 0 } else { kx + 1 },
+                ky,
                 kz,
                 sx: shear[0][i],
                 sy: shear[1][i],
@@ -387,6 +414,7 @@ mod tests {
             && bits(&a.inv_direction) == bits(&b.inv_direction)
             && a.near_row == b.near_row
             && a.far_row == b.far_row
+            && bits(&a.permuted_origin) == bits(&b.permuted_origin)
             && bits(&s.origin.to_array()) == bits(&t.origin.to_array())
             && (s.kx, s.ky, s.kz) == (t.kx, t.ky, t.kz)
             && bits(&[s.sx, s.sy, s.sz]) == bits(&[t.sx, t.sy, t.sz])

@@ -15,7 +15,7 @@
 pub(crate) mod avx2;
 pub(crate) mod scalar;
 
-use glam::{Vec3, Vec3A};
+use glam::Vec3;
 
 use super::float_error::gamma;
 use super::triangle::WatertightRay;
@@ -114,6 +114,9 @@ pub(crate) struct RayData {
     pub near_row: [usize; 3],
     pub far_row: [usize; 3],
     pub triangle: WatertightRay,
+    /// The origin in the watertight test's permuted axes (`[o[kx], o[ky], o[kz]]`), which
+    /// every leaf block test reads: kept here rather than picked again per block.
+    pub permuted_origin: [f32; 3],
 }
 
 impl RayData {
@@ -126,12 +129,14 @@ impl RayData {
             1.0 / safe(direction.z),
         ];
         let near_row = [0, 1, 2].map(|axis| axis + 3 * (inv_direction[axis] < 0.0) as usize);
+        let triangle = WatertightRay::new(origin, direction);
         RayData {
             origin: origin.to_array(),
             inv_direction,
             near_row,
             far_row: near_row.map(|row| (row + 3) % 6),
-            triangle: WatertightRay::new(origin, direction),
+            permuted_origin: [origin[triangle.kx], origin[triangle.ky], origin[triangle.kz]],
+            triangle,
         }
     }
 
@@ -141,14 +146,6 @@ impl RayData {
     pub fn is_finite(&self) -> bool {
         self.origin.iter().all(|v| v.is_finite())
             && self.inv_direction.iter().all(|v| v.is_finite() && *v != 0.0)
-    }
-
-    /// The ray origin in the watertight test's permuted axes.
-    #[inline(always)]
-    pub fn permuted_origin(&self) -> [f32; 3] {
-        let o = Vec3A::from(self.origin);
-        let t = &self.triangle;
-        [o[t.kx], o[t.ky], o[t.kz]]
     }
 }
 
