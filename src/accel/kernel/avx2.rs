@@ -340,21 +340,25 @@ pub(crate) unsafe fn ray_packet(origins: &[glam::Vec3], directions: &[glam::Vec3
         spill(reciprocal(dz)),
     ];
     let (y_wins, z_wins) = (mask(y_wins), mask(z_wins));
+    // Per lane, the rows and the permutation from small tables: the sign bits of the three
+    // axes index the rows, kz the permutation.
+    let signs = |i: usize| {
+        (negative[0] >> i & 1 | (negative[1] >> i & 1) << 1 | (negative[2] >> i & 1) << 2) as usize
+    };
     std::array::from_fn(|i| {
-        let origin = origins[i.min(n - 1)];
-        let near_row = [0, 1, 2].map(|axis| axis + 3 * (negative[axis] >> i & 1) as usize);
+        let origin = origins[i.min(n - 1)].to_array();
         let kz = if z_wins >> i & 1 != 0 {
             2
         } else {
             (y_wins >> i & 1) as usize
         };
-        let kx = if kz == 2 { 0 } else { kz + 1 };
-        let ky = if kx == 2 { 0 } else { kx + 1 };
+        let [kx, ky, kz] = PERMUTATION[kz];
+        let (near_row, far_row) = ROWS[signs(i)];
         RayData {
-            origin: origin.to_array(),
+            origin,
             inv_direction: [inv[0][i], inv[1][i], inv[2][i]],
             near_row,
-            far_row: near_row.map(|row| (row + 3) % 6),
+            far_row,
             permuted_origin: [origin[kx], origin[ky], origin[kz]],
             triangle: crate::accel::triangle::WatertightRay {
                 origin: origin.into(),
@@ -368,6 +372,27 @@ pub(crate) unsafe fn ray_packet(origins: &[glam::Vec3], directions: &[glam::Vec3
         }
     })
 }
+
+/// `(kx, ky, kz)` by `kz`: `kx = kz + 1`, `ky = kz + 2` (mod 3).
+const PERMUTATION: [[usize; 3]; 3] = [[1, 2, 0], [2, 0, 1], [0, 1, 2]];
+
+/// [`RayData`]'s near and far rows by the directions' sign bits (bit `axis` set where the
+/// reciprocal direction is negative): `near = axis + 3·bit`, `far` the other row.
+const ROWS: [([usize; 3], [usize; 3]); 8] = {
+    let mut rows = [([0; 3], [0; 3]); 8];
+    let mut signs = 0;
+    while signs < 8 {
+        let mut axis = 0;
+        while axis < 3 {
+            let negative = signs >> axis & 1;
+            rows[signs].0[axis] = axis + 3 * negative;
+            rows[signs].1[axis] = axis + 3 * (1 - negative);
+            axis += 1;
+        }
+        signs += 1;
+    }
+    rows
+};
 
 /// A zero component (either sign) replaced by 1e-30 of its sign, as `RayData::new` does.
 #[inline(always)]
