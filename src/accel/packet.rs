@@ -67,7 +67,8 @@
 //! Tried and not kept: certifying children that *every* ray meets (the interval's largest near
 //! against its smallest far), to skip only their ray-by-ray tests: it fired on 63 % of the
 //! tested children at 65,536 rays and still cost more (+1 %) than it saved, and ran on every
-//! packet.
+//! packet; nor, for coherent packets only, to skip the ray-by-ray tests of the leaf children
+//! that every ray meets for sure (+3.6 % instructions at 65,536 rays).
 //!
 //! Closures inside this `#[target_feature]` code are not inlined and turn every intrinsic
 //! into a call (the packet ran 40 % slower): use `#[inline(always)]` functions.
