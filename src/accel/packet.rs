@@ -62,8 +62,10 @@
 //! and reading the rays included), against the commit before: `cube` 4² × 65,536 rays −9.8 %
 //! (the permuted origin kept in [`RayData`] and the finite lanes found in SIMD −2.3 %, the
 //! coherent inner children −4.9 %, the shared translation −2.9 %), 16² × 4,096 −3.5 %,
-//! 64² × 256 −1.8 %; `hall` 64² × 256 −0.4 %. `hmdist render` of `cube` at 32² × 65,536
-//! rays: 0.93× the time (median of 9 interleaved pairs, 0.77–1.00).
+//! 64² × 256 −1.8 %; `hall` 64² × 256 −0.4 %. The time moved less than the instructions:
+//! `hmdist render` of `cube` at 32² × 65,536 rays took 0.93× the time in one set of 9
+//! interleaved pairs and 0.99× in another; at 48² × 65,536 1.00× wall, 0.97× cpu (7 pairs);
+//! its `mrays_per_s` +1 to +5 % (3 pairs, with the commit after this one).
 //! Tried and not kept: certifying children that *every* ray meets (the interval's largest near
 //! against its smallest far), to skip only their ray-by-ray tests: it fired on 63 % of the
 //! tested children at 65,536 rays and still cost more (+1 %) than it saved, and ran on every
