@@ -74,6 +74,9 @@ unsafe fn slab(node: &Node, ray: &RayData, row: usize, axis: usize) -> __m256 {
 /// The eight triangles' corners translated to the ray origin, in the ray's permuted axes
 /// (`[corner][kx, ky, kz]`): the part of the block test that depends on the ray only through
 /// its origin and axis permutation, so that rays which share both can share it.
+///
+/// # Safety
+/// As [`block_translated`]; the block is 32-byte aligned.
 #[inline(always)]
 pub(crate) unsafe fn translated(block: &Block, ray: &RayData) -> [[__m256; 3]; 3] {
     let [ox, oy, oz] = ray.permuted_origin;
@@ -157,117 +160,118 @@ impl Lanes for Avx2 {
 
 /// [`Lanes::block`] of the block whose corners [`translated`] gave for this ray's origin and
 /// axis permutation.
+///
+/// # Safety
+/// The CPU must support AVX2 (called only inside the `#[target_feature]` traversals).
 #[inline(always)]
 pub(crate) unsafe fn block_translated(corners: [[__m256; 3]; 3], ray: &RayData, t_max: f32) -> BlockHits {
-    {
-        let r = &ray.triangle;
-        let [ax, ay, az] = sheared(corners[0], ray);
-        let [bx, by, bz] = sheared(corners[1], ray);
-        let [cx, cy, cz] = sheared(corners[2], ray);
-        let mut e0 = edge(bx, by, cx, cy);
-        let mut e1 = edge(cx, cy, ax, ay);
-        let mut e2 = edge(ax, ay, bx, by);
-        let zero = _mm256_setzero_ps();
-        let exact_zero = mask(_mm256_or_ps(
-            _mm256_or_ps(
-                _mm256_cmp_ps::<_CMP_EQ_OQ>(e0, zero),
-                _mm256_cmp_ps::<_CMP_EQ_OQ>(e1, zero),
-            ),
-            _mm256_cmp_ps::<_CMP_EQ_OQ>(e2, zero),
-        ));
-        if exact_zero != 0 {
-            [e0, e1, e2] = edges_in_f64(exact_zero, [e0, e1, e2], [ax, ay, bx, by, cx, cy]);
-        }
-        let negative = _mm256_or_ps(
-            _mm256_or_ps(
-                _mm256_cmp_ps::<_CMP_LT_OQ>(e0, zero),
-                _mm256_cmp_ps::<_CMP_LT_OQ>(e1, zero),
-            ),
-            _mm256_cmp_ps::<_CMP_LT_OQ>(e2, zero),
-        );
-        let positive = _mm256_or_ps(
-            _mm256_or_ps(
-                _mm256_cmp_ps::<_CMP_GT_OQ>(e0, zero),
-                _mm256_cmp_ps::<_CMP_GT_OQ>(e1, zero),
-            ),
-            _mm256_cmp_ps::<_CMP_GT_OQ>(e2, zero),
-        );
-        let det = _mm256_add_ps(_mm256_add_ps(e0, e1), e2);
-        let sz = splat(r.sz);
-        let (az, bz, cz) = (
-            _mm256_mul_ps(az, sz),
-            _mm256_mul_ps(bz, sz),
-            _mm256_mul_ps(cz, sz),
-        );
-        let t_scaled = _mm256_add_ps(
-            _mm256_add_ps(_mm256_mul_ps(e0, az), _mm256_mul_ps(e1, bz)),
-            _mm256_mul_ps(e2, cz),
-        );
-        let t_max_det = _mm256_mul_ps(splat(t_max), det);
-        let det_negative = _mm256_cmp_ps::<_CMP_LT_OQ>(det, zero);
-        let outside_negative = _mm256_or_ps(
-            _mm256_cmp_ps::<_CMP_GE_OQ>(t_scaled, zero),
-            _mm256_cmp_ps::<_CMP_LT_OQ>(t_scaled, t_max_det),
-        );
-        let outside_positive = _mm256_or_ps(
-            _mm256_cmp_ps::<_CMP_LE_OQ>(t_scaled, zero),
-            _mm256_cmp_ps::<_CMP_GT_OQ>(t_scaled, t_max_det),
-        );
-        let outside = _mm256_blendv_ps(outside_positive, outside_negative, det_negative);
-        let miss = _mm256_or_ps(
-            _mm256_or_ps(
-                _mm256_and_ps(negative, positive),
-                _mm256_cmp_ps::<_CMP_EQ_OQ>(det, zero),
-            ),
-            outside,
-        );
-        let hit = !mask(miss) & 0xff;
-        let mut hits = BlockHits {
-            hit,
-            within_error: 0,
-            t: [0.0; WIDTH],
-        };
-        if hit == 0 {
-            return hits;
-        }
-        let inv_det = _mm256_div_ps(splat(1.0), det);
-        let t = _mm256_mul_ps(t_scaled, inv_det);
-        _mm256_storeu_ps(hits.t.as_mut_ptr(), t);
+    let r = &ray.triangle;
+    let [ax, ay, az] = sheared(corners[0], ray);
+    let [bx, by, bz] = sheared(corners[1], ray);
+    let [cx, cy, cz] = sheared(corners[2], ray);
+    let mut e0 = edge(bx, by, cx, cy);
+    let mut e1 = edge(cx, cy, ax, ay);
+    let mut e2 = edge(ax, ay, bx, by);
+    let zero = _mm256_setzero_ps();
+    let exact_zero = mask(_mm256_or_ps(
+        _mm256_or_ps(
+            _mm256_cmp_ps::<_CMP_EQ_OQ>(e0, zero),
+            _mm256_cmp_ps::<_CMP_EQ_OQ>(e1, zero),
+        ),
+        _mm256_cmp_ps::<_CMP_EQ_OQ>(e2, zero),
+    ));
+    if exact_zero != 0 {
+        [e0, e1, e2] = edges_in_f64(exact_zero, [e0, e1, e2], [ax, ay, bx, by, cx, cy]);
+    }
+    let negative = _mm256_or_ps(
+        _mm256_or_ps(
+            _mm256_cmp_ps::<_CMP_LT_OQ>(e0, zero),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(e1, zero),
+        ),
+        _mm256_cmp_ps::<_CMP_LT_OQ>(e2, zero),
+    );
+    let positive = _mm256_or_ps(
+        _mm256_or_ps(
+            _mm256_cmp_ps::<_CMP_GT_OQ>(e0, zero),
+            _mm256_cmp_ps::<_CMP_GT_OQ>(e1, zero),
+        ),
+        _mm256_cmp_ps::<_CMP_GT_OQ>(e2, zero),
+    );
+    let det = _mm256_add_ps(_mm256_add_ps(e0, e1), e2);
+    let sz = splat(r.sz);
+    let (az, bz, cz) = (
+        _mm256_mul_ps(az, sz),
+        _mm256_mul_ps(bz, sz),
+        _mm256_mul_ps(cz, sz),
+    );
+    let t_scaled = _mm256_add_ps(
+        _mm256_add_ps(_mm256_mul_ps(e0, az), _mm256_mul_ps(e1, bz)),
+        _mm256_mul_ps(e2, cz),
+    );
+    let t_max_det = _mm256_mul_ps(splat(t_max), det);
+    let det_negative = _mm256_cmp_ps::<_CMP_LT_OQ>(det, zero);
+    let outside_negative = _mm256_or_ps(
+        _mm256_cmp_ps::<_CMP_GE_OQ>(t_scaled, zero),
+        _mm256_cmp_ps::<_CMP_LT_OQ>(t_scaled, t_max_det),
+    );
+    let outside_positive = _mm256_or_ps(
+        _mm256_cmp_ps::<_CMP_LE_OQ>(t_scaled, zero),
+        _mm256_cmp_ps::<_CMP_GT_OQ>(t_scaled, t_max_det),
+    );
+    let outside = _mm256_blendv_ps(outside_positive, outside_negative, det_negative);
+    let miss = _mm256_or_ps(
+        _mm256_or_ps(
+            _mm256_and_ps(negative, positive),
+            _mm256_cmp_ps::<_CMP_EQ_OQ>(det, zero),
+        ),
+        outside,
+    );
+    let hit = !mask(miss) & 0xff;
+    let mut hits = BlockHits {
+        hit,
+        within_error: 0,
+        t: [0.0; WIDTH],
+    };
+    if hit == 0 {
+        return hits;
+    }
+    let inv_det = _mm256_div_ps(splat(1.0), det);
+    let t = _mm256_mul_ps(t_scaled, inv_det);
+    _mm256_storeu_ps(hits.t.as_mut_ptr(), t);
 
-        // The error bound of t (pbrt-v4 §6.8.7), as in `WatertightRay::intersect`.
-        let max_zt = max_abs(az, bz, cz);
-        let max_xt = max_abs(ax, bx, cx);
-        let max_yt = max_abs(ay, by, cy);
-        let delta_z = _mm256_mul_ps(splat(gamma(3)), max_zt);
-        let delta_x = _mm256_mul_ps(splat(gamma(5)), _mm256_add_ps(max_xt, max_zt));
-        let delta_y = _mm256_mul_ps(splat(gamma(5)), _mm256_add_ps(max_yt, max_zt));
-        let delta_e = _mm256_mul_ps(
-            splat(2.0),
+    // The error bound of t (pbrt-v4 §6.8.7), as in `WatertightRay::intersect`.
+    let max_zt = max_abs(az, bz, cz);
+    let max_xt = max_abs(ax, bx, cx);
+    let max_yt = max_abs(ay, by, cy);
+    let delta_z = _mm256_mul_ps(splat(gamma(3)), max_zt);
+    let delta_x = _mm256_mul_ps(splat(gamma(5)), _mm256_add_ps(max_xt, max_zt));
+    let delta_y = _mm256_mul_ps(splat(gamma(5)), _mm256_add_ps(max_yt, max_zt));
+    let delta_e = _mm256_mul_ps(
+        splat(2.0),
+        _mm256_add_ps(
+            _mm256_add_ps(
+                _mm256_mul_ps(_mm256_mul_ps(splat(gamma(2)), max_xt), max_yt),
+                _mm256_mul_ps(delta_y, max_xt),
+            ),
+            _mm256_mul_ps(delta_x, max_yt),
+        ),
+    );
+    let max_e = max_abs(e0, e1, e2);
+    let delta_t = _mm256_mul_ps(
+        _mm256_mul_ps(
+            splat(3.0),
             _mm256_add_ps(
                 _mm256_add_ps(
-                    _mm256_mul_ps(_mm256_mul_ps(splat(gamma(2)), max_xt), max_yt),
-                    _mm256_mul_ps(delta_y, max_xt),
+                    _mm256_mul_ps(_mm256_mul_ps(splat(gamma(3)), max_e), max_zt),
+                    _mm256_mul_ps(delta_e, max_zt),
                 ),
-                _mm256_mul_ps(delta_x, max_yt),
+                _mm256_mul_ps(delta_z, max_e),
             ),
-        );
-        let max_e = max_abs(e0, e1, e2);
-        let delta_t = _mm256_mul_ps(
-            _mm256_mul_ps(
-                splat(3.0),
-                _mm256_add_ps(
-                    _mm256_add_ps(
-                        _mm256_mul_ps(_mm256_mul_ps(splat(gamma(3)), max_e), max_zt),
-                        _mm256_mul_ps(delta_e, max_zt),
-                    ),
-                    _mm256_mul_ps(delta_z, max_e),
-                ),
-            ),
-            abs(inv_det),
-        );
-        hits.within_error = mask(_mm256_cmp_ps::<_CMP_LE_OQ>(t, delta_t)) & hit;
-        hits
-    }
+        ),
+        abs(inv_det),
+    );
+    hits.within_error = mask(_mm256_cmp_ps::<_CMP_LE_OQ>(t, delta_t)) & hit;
+    hits
 }
 
 /// The lanes whose edge functions came out exactly zero, recomputed in f64 as the scalar test
