@@ -231,7 +231,6 @@ impl Accel {
             use super::traverse::Search;
             // SAFETY: both kernels imply AVX2, and `Kernel::best`/`with_kernel` only choose
             // kernels the CPU has.
-            let rays: [RayData; PACKET] = unsafe { super::kernel::avx2::ray_packet(origins, directions) };
             let accept: [_; PACKET] = std::array::from_fn(|i| {
                 let leaving = leaving[i.min(n - 1)];
                 move |block: u32, lane: usize| self.may_take_within_error_hit(leaving, block, lane)
@@ -246,9 +245,9 @@ impl Accel {
             // SAFETY: `Kernel::best` and `with_kernel` only choose kernels the CPU has.
             unsafe {
                 if self.kernel == Kernel::Avx2 {
-                    closest_packet_avx2(bvh, &rays[..n], searches, packet_stack, stack, counter);
+                    closest_packet_avx2(bvh, (origins, directions), searches, packet_stack, stack, counter);
                 } else {
-                    closest_packet_avx512(bvh, &rays[..n], searches, packet_stack, stack, counter);
+                    closest_packet_avx512(bvh, (origins, directions), searches, packet_stack, stack, counter);
                 }
             }
             for (out, search) in out.iter_mut().zip(searches.iter()) {

@@ -78,7 +78,9 @@
 use std::arch::x86_64::*;
 use std::mem::MaybeUninit;
 
-use super::kernel::avx2::{block_translated, translated, Avx2};
+use glam::Vec3;
+
+use super::kernel::avx2::{block_translated, ray_lanes, translated, Avx2, PacketLanes};
 use super::kernel::{RayData, FAR_SCALE};
 use super::traverse::{descend, Counter, Entry, Search};
 use super::wide::{Node, WideBvh, EMPTY, LEAF, WIDTH};
@@ -109,19 +111,22 @@ pub(crate) struct PacketEntry {
     rays: u32,
 }
 
-/// The packet traversal with AVX2 enabled: `rays[r]`'s hits go to `searches[r]`.
+/// The packet traversal with AVX2 enabled: the hits of the ray from `origins[r]` along
+/// `directions[r]` go to `searches[r]`.
 ///
 /// # Safety
 /// The CPU must support AVX2.
 #[target_feature(enable = "avx2")]
 pub(crate) unsafe fn closest_packet_avx2<C: Counter>(
     bvh: &WideBvh,
-    rays: &[RayData],
+    (origins, directions): (&[Vec3], &[Vec3]),
     searches: &mut [Search],
     packet_stack: &mut [MaybeUninit<PacketEntry>],
     stack: &mut [MaybeUninit<Entry>],
     counter: &mut C,
 ) {
+    let mut rays = [const { MaybeUninit::uninit() }; WIDTH];
+    let rays = ray_lanes(origins, directions, &mut rays);
     traverse::<C>(bvh, rays, searches, packet_stack, stack, counter)
 }
 
@@ -132,12 +137,14 @@ pub(crate) unsafe fn closest_packet_avx2<C: Counter>(
 #[target_feature(enable = "avx2,avx512f,avx512vl,avx512dq,avx512bw")]
 pub(crate) unsafe fn closest_packet_avx512<C: Counter>(
     bvh: &WideBvh,
-    rays: &[RayData],
+    (origins, directions): (&[Vec3], &[Vec3]),
     searches: &mut [Search],
     packet_stack: &mut [MaybeUninit<PacketEntry>],
     stack: &mut [MaybeUninit<Entry>],
     counter: &mut C,
 ) {
+    let mut rays = [const { MaybeUninit::uninit() }; WIDTH];
+    let rays = ray_lanes(origins, directions, &mut rays);
     traverse::<C>(bvh, rays, searches, packet_stack, stack, counter)
 }
 
@@ -202,7 +209,7 @@ unsafe fn horizontal_min(v: __m256) -> f32 {
 #[inline(always)]
 unsafe fn traverse<C: Counter>(
     bvh: &WideBvh,
-    rays: &[RayData],
+    (rays, lanes): (&[RayData], PacketLanes),
     searches: &mut [Search],
     packet_stack: &mut [MaybeUninit<PacketEntry>],
     stack: &mut [MaybeUninit<Entry>],
@@ -211,24 +218,7 @@ unsafe fn traverse<C: Counter>(
     let n = rays.len();
     debug_assert!((1..=PACKET).contains(&n) && searches.len() == n);
     // Lane r holds ray r; spare lanes repeat the last ray and are never active.
-    let mut columns = [[0.0f32; PACKET]; 6];
-    for r in 0..PACKET {
-        let ray = &rays[r.min(n - 1)];
-        for axis in 0..3 {
-            columns[axis][r] = ray.origin[axis];
-            columns[3 + axis][r] = ray.inv_direction[axis];
-        }
-    }
-    let origin = [
-        _mm256_loadu_ps(columns[0].as_ptr()),
-        _mm256_loadu_ps(columns[1].as_ptr()),
-        _mm256_loadu_ps(columns[2].as_ptr()),
-    ];
-    let inverse = [
-        _mm256_loadu_ps(columns[3].as_ptr()),
-        _mm256_loadu_ps(columns[4].as_ptr()),
-        _mm256_loadu_ps(columns[5].as_ptr()),
-    ];
+    let PacketLanes { origin, inverse, .. } = lanes;
     let zero = _mm256_setzero_ps();
     let negative = [
         _mm256_cmp_ps::<_CMP_LT_OQ>(inverse[0], zero),
@@ -252,10 +242,8 @@ unsafe fn traverse<C: Counter>(
     }
     // Rays that leave one point along one dominant axis (a gather point's rays, nearly
     // always) share the first step of every leaf test: the corners translated to the origin.
-    let first = &rays[0];
-    let shared = rays[1..n].iter().all(|ray| {
-        ray.origin.map(f32::to_bits) == first.origin.map(f32::to_bits) && ray.triangle.kz == first.triangle.kz
-    });
+    let first = &rays[all.trailing_zeros() as usize];
+    let shared = one_origin_and_axis(lanes, all);
     'visit: loop {
         if reference & LEAF != 0 && shared {
             let block = reference & !LEAF;
@@ -404,6 +392,25 @@ unsafe fn finite_lanes(origin: [__m256; 3], inverse: [__m256; 3]) -> u32 {
         lanes = _mm256_and_ps(lanes, _mm256_and_ps(finite(v), nonzero));
     }
     _mm256_movemask_ps(lanes) as u32
+}
+
+/// Whether the rays of `lanes` (bit per lane, at least one) leave one point (the same bits)
+/// along one dominant axis (the watertight test's `kz`).
+#[inline(always)]
+unsafe fn one_origin_and_axis(packet: PacketLanes, lanes: u32) -> bool {
+    let uniform = |bits: u32| bits & lanes == 0 || bits & lanes == lanes;
+    let first_lane = _mm256_set1_epi32(lanes.trailing_zeros() as i32);
+    let mut same = _mm256_setzero_si256();
+    for o in packet.origin {
+        let o = _mm256_castps_si256(o);
+        let first = _mm256_permutevar8x32_epi32(o, first_lane);
+        same = _mm256_or_si256(same, _mm256_xor_si256(o, first));
+    }
+    let equal = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(
+        same,
+        _mm256_setzero_si256(),
+    ))) as u32;
+    equal & lanes == lanes && uniform(packet.z_wins) && (packet.z_wins & lanes != 0 || uniform(packet.y_wins))
 }
 
 /// All bits set in the lanes whose value is finite (not NaN, not infinite).

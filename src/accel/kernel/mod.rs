@@ -104,6 +104,7 @@ impl Kernel {
 }
 
 /// Per-ray constants of both tests.
+#[derive(Clone)]
 pub(crate) struct RayData {
     pub origin: [f32; 3],
     /// `1/d` per axis; a zero component is replaced by a tiny one of the same sign, so
