@@ -290,6 +290,41 @@ pub fn hemisphere(weighting: Weighting, u: Vec2) -> Vec3 {
     Vec3::new(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta)
 }
 
+/// [`hemisphere`] of eight points of the unit square at once, `u[0]` their x and `u[1]` their
+/// y, as lanes (x, y, z): the same bits. The square roots and products run a vector at a time
+/// (plain loops that the compiler vectorises: the same IEEE operations lane by lane), the
+/// sines and cosines one by one (`sin_cos`, as `hemisphere` calls it).
+#[inline(always)]
+pub fn hemisphere_lanes(weighting: Weighting, u: &[[f32; 8]; 2]) -> [[f32; 8]; 3] {
+    let (mut sin_theta, mut cos_theta) = ([0.0f32; 8], [0.0f32; 8]);
+    match weighting {
+        Weighting::Cosine => {
+            for l in 0..8 {
+                sin_theta[l] = u[0][l].sqrt();
+                cos_theta[l] = (1.0 - u[0][l]).sqrt();
+            }
+        }
+        Weighting::Uniform => {
+            for l in 0..8 {
+                let c = 1.0 - u[0][l];
+                sin_theta[l] = (1.0 - c * c).max(0.0).sqrt();
+                cos_theta[l] = c;
+            }
+        }
+    }
+    let (mut sin_phi, mut cos_phi) = ([0.0f32; 8], [0.0f32; 8]);
+    for l in 0..8 {
+        (sin_phi[l], cos_phi[l]) = (2.0 * PI * u[1][l]).sin_cos();
+    }
+    let mut v = [[0.0f32; 8]; 3];
+    for l in 0..8 {
+        v[0][l] = cos_phi[l] * sin_theta[l];
+        v[1][l] = sin_phi[l] * sin_theta[l];
+        v[2][l] = cos_theta[l];
+    }
+    v
+}
+
 /// An orthonormal frame around a unit normal (Duff et al. 2017, "Building an Orthonormal
 /// Basis, Revisited"): `to_world` maps local (x, y, z = normal) to world.
 #[derive(Clone, Copy, Debug)]
@@ -320,6 +355,19 @@ impl Frame {
     #[inline(always)]
     pub fn to_world(&self, v: Vec3) -> Vec3 {
         v.x * self.t + v.y * self.b + v.z * self.n
+    }
+
+    /// [`Frame::to_world`] of eight local vectors as lanes (x, y, z): the same bits.
+    #[inline(always)]
+    pub fn to_world_lanes(&self, v: &[[f32; 8]; 3]) -> [[f32; 8]; 3] {
+        let mut world = [[0.0f32; 8]; 3];
+        for (axis, world) in world.iter_mut().enumerate() {
+            let (t, b, n) = (self.t[axis], self.b[axis], self.n[axis]);
+            for l in 0..8 {
+                world[l] = v[0][l] * t + v[1][l] * b + v[2][l] * n;
+            }
+        }
+        world
     }
 }
 

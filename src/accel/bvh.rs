@@ -25,7 +25,7 @@ use super::kernel::{Kernel, RayData};
 use super::traverse::{closest, stack_size, Closest, Counter, Entry, TraversalStats};
 use super::triangle::barycentric_point_error;
 use super::wide::{BinaryBuilder, WideBvh, WIDTH};
-use super::{Hit, RayCaster, PACKET};
+use super::{Hit, RayCaster, RayLanes, PACKET};
 use crate::error::Result;
 use crate::scene::Mesh;
 
@@ -225,8 +225,37 @@ impl Accel {
             leaving.len(),
             out.len()
         );
+        if n >= 2 && self.kernel.has_packets() {
+            let packet = RayLanes::from_rays(origins, directions);
+            self.cast_lanes(&packet, leaving, t_max, out, counter);
+            return;
+        }
+        for i in 0..n {
+            out[i] = self
+                .trace(
+                    &RayData::new(origins[i], directions[i]),
+                    t_max,
+                    leaving[i],
+                    counter,
+                )
+                .map_or(f32::INFINITY, |c| c.t);
+        }
+    }
+
+    /// The first `leaving.len()` rays of `packet` (1 to [`PACKET`]) as a packet: the kernel
+    /// must have one ([`Kernel::has_packets`]).
+    #[inline]
+    fn cast_lanes<C: Counter>(
+        &self,
+        packet: &RayLanes,
+        leaving: &[Option<u32>],
+        t_max: f32,
+        out: &mut [f32],
+        counter: &mut C,
+    ) {
+        let n = leaving.len();
         #[cfg(target_arch = "x86_64")]
-        if n >= 2 && matches!(self.kernel, Kernel::Avx2 | Kernel::Avx512) {
+        {
             use super::packet::{closest_packet_avx2, closest_packet_avx512, PacketEntry};
             use super::traverse::Search;
             // SAFETY: both kernels imply AVX2, and `Kernel::best`/`with_kernel` only choose
@@ -245,26 +274,17 @@ impl Accel {
             // SAFETY: `Kernel::best` and `with_kernel` only choose kernels the CPU has.
             unsafe {
                 if self.kernel == Kernel::Avx2 {
-                    closest_packet_avx2(bvh, (origins, directions), searches, packet_stack, stack, counter);
+                    closest_packet_avx2(bvh, packet, searches, packet_stack, stack, counter);
                 } else {
-                    closest_packet_avx512(bvh, (origins, directions), searches, packet_stack, stack, counter);
+                    closest_packet_avx512(bvh, packet, searches, packet_stack, stack, counter);
                 }
             }
             for (out, search) in out.iter_mut().zip(searches.iter()) {
                 *out = search.result().map_or(f32::INFINITY, |c| c.t);
             }
-            return;
         }
-        for i in 0..n {
-            out[i] = self
-                .trace(
-                    &RayData::new(origins[i], directions[i]),
-                    t_max,
-                    leaving[i],
-                    counter,
-                )
-                .map_or(f32::INFINITY, |c| c.t);
-        }
+        #[cfg(not(target_arch = "x86_64"))]
+        unreachable!("no packet kernel on this architecture: {packet:?} {n} {t_max} {out:?} {counter:?}");
     }
 
     /// A traversal stack of [`stack_size`] entries for this BVH: `inline` (on the thread's
@@ -391,6 +411,29 @@ impl RayCaster for Accel {
         out: &mut [f32],
     ) {
         self.cast_packet(origins, directions, leaving, t_max, out, &mut ());
+    }
+
+    #[inline]
+    fn hit_distances_of_lanes(
+        &self,
+        rays: &RayLanes,
+        len: usize,
+        leaving: Option<u32>,
+        t_max: f32,
+        out: &mut [f32],
+    ) {
+        assert!(
+            len <= PACKET && out.len() >= len,
+            "hit_distances_of_lanes: {len} rays (at most {PACKET}), {} outputs",
+            out.len()
+        );
+        if len >= 2 && self.kernel.has_packets() {
+            self.cast_lanes(rays, &[leaving; PACKET][..len], t_max, out, &mut ());
+        } else {
+            for (i, out) in out.iter_mut().enumerate().take(len) {
+                *out = self.hit_distance(rays.origin(i), rays.direction(i), t_max, leaving);
+            }
+        }
     }
 }
 

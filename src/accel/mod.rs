@@ -118,6 +118,65 @@ pub trait RayCaster: Sync {
             *out = self.hit_distance(origins[i], directions[i], t_max, leaving[i]);
         }
     }
+
+    /// [`RayCaster::hit_distances`] of the first `len` rays of `rays` (at most [`PACKET`]),
+    /// which all leave triangle `leaving`: the same bits, without taking the rays apart and
+    /// putting them together again where the caller has them as lanes already.
+    fn hit_distances_of_lanes(
+        &self,
+        rays: &RayLanes,
+        len: usize,
+        leaving: Option<u32>,
+        t_max: f32,
+        out: &mut [f32],
+    ) {
+        for (i, out) in out.iter_mut().enumerate().take(len) {
+            *out = self.hit_distance(rays.origin(i), rays.direction(i), t_max, leaving);
+        }
+    }
+}
+
+/// Up to [`PACKET`] rays as lanes: lane `i` holds ray `i`'s origin and direction, axis by
+/// axis; lanes past a packet's last ray repeat it.
+#[derive(Clone, Copy, Debug)]
+pub struct RayLanes {
+    /// The origins' x, y and z.
+    pub origin: [[f32; PACKET]; 3],
+    /// The directions' x, y and z (any length).
+    pub direction: [[f32; PACKET]; 3],
+}
+
+impl RayLanes {
+    /// The rays from `origins[i]` along `directions[i]` (one length, 1 to [`PACKET`]).
+    #[inline(always)]
+    pub fn from_rays(origins: &[Vec3], directions: &[Vec3]) -> RayLanes {
+        let n = directions.len();
+        debug_assert!((1..=PACKET).contains(&n) && origins.len() == n);
+        let mut lanes = RayLanes {
+            origin: [[0.0; PACKET]; 3],
+            direction: [[0.0; PACKET]; 3],
+        };
+        for i in 0..PACKET {
+            let (o, d) = (origins[i.min(n - 1)], directions[i.min(n - 1)]);
+            for axis in 0..3 {
+                lanes.origin[axis][i] = o[axis];
+                lanes.direction[axis][i] = d[axis];
+            }
+        }
+        lanes
+    }
+
+    /// Ray `i`'s origin.
+    #[inline(always)]
+    pub fn origin(&self, i: usize) -> Vec3 {
+        Vec3::new(self.origin[0][i], self.origin[1][i], self.origin[2][i])
+    }
+
+    /// Ray `i`'s direction.
+    #[inline(always)]
+    pub fn direction(&self, i: usize) -> Vec3 {
+        Vec3::new(self.direction[0][i], self.direction[1][i], self.direction[2][i])
+    }
 }
 
 /// Children per node of the wide BVH, and triangles per leaf block: what the SAH builder

@@ -78,13 +78,11 @@
 use std::arch::x86_64::*;
 use std::mem::MaybeUninit;
 
-use glam::Vec3;
-
 use super::kernel::avx2::{block_translated, ray_lanes, translated, Avx2, PacketLanes};
 use super::kernel::{RayData, FAR_SCALE};
 use super::traverse::{descend, Counter, Entry, Search};
 use super::wide::{Node, WideBvh, EMPTY, LEAF, WIDTH};
-use super::PACKET;
+use super::{RayLanes, PACKET};
 
 /// Below this many active rays, a packet's subtree is finished ray by ray. Measured on `cube`
 /// and `hall` (256² × 256 and 64² × 4,096 rays, Mrays/s on 2 cores): 3 and 4 were as fast at
@@ -111,22 +109,22 @@ pub(crate) struct PacketEntry {
     rays: u32,
 }
 
-/// The packet traversal with AVX2 enabled: the hits of the ray from `origins[r]` along
-/// `directions[r]` go to `searches[r]`.
+/// The packet traversal with AVX2 enabled: the hits of ray `r` of `packet` go to
+/// `searches[r]` (as many rays as searches).
 ///
 /// # Safety
 /// The CPU must support AVX2.
 #[target_feature(enable = "avx2")]
 pub(crate) unsafe fn closest_packet_avx2<C: Counter>(
     bvh: &WideBvh,
-    (origins, directions): (&[Vec3], &[Vec3]),
+    packet: &RayLanes,
     searches: &mut [Search],
     packet_stack: &mut [MaybeUninit<PacketEntry>],
     stack: &mut [MaybeUninit<Entry>],
     counter: &mut C,
 ) {
     let mut rays = [const { MaybeUninit::uninit() }; WIDTH];
-    let rays = ray_lanes(origins, directions, &mut rays);
+    let rays = ray_lanes(packet, searches.len(), &mut rays);
     traverse::<C>(bvh, rays, searches, packet_stack, stack, counter)
 }
 
@@ -137,14 +135,14 @@ pub(crate) unsafe fn closest_packet_avx2<C: Counter>(
 #[target_feature(enable = "avx2,avx512f,avx512vl,avx512dq,avx512bw")]
 pub(crate) unsafe fn closest_packet_avx512<C: Counter>(
     bvh: &WideBvh,
-    (origins, directions): (&[Vec3], &[Vec3]),
+    packet: &RayLanes,
     searches: &mut [Search],
     packet_stack: &mut [MaybeUninit<PacketEntry>],
     stack: &mut [MaybeUninit<Entry>],
     counter: &mut C,
 ) {
     let mut rays = [const { MaybeUninit::uninit() }; WIDTH];
-    let rays = ray_lanes(origins, directions, &mut rays);
+    let rays = ray_lanes(packet, searches.len(), &mut rays);
     traverse::<C>(bvh, rays, searches, packet_stack, stack, counter)
 }
 

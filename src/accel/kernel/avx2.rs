@@ -12,6 +12,7 @@ use super::{BlockHits, Lanes, RayData, FAR_SCALE};
 use crate::accel::float_error::gamma;
 use crate::accel::traverse::{closest, Closest, Counter, Entry};
 use crate::accel::wide::{Block, Node, WideBvh, WIDTH};
+use crate::accel::RayLanes;
 
 pub(crate) struct Avx2;
 
@@ -310,7 +311,8 @@ unsafe fn ray_packet(
     directions: &[glam::Vec3],
 ) -> (Vec<RayData>, [[f32; WIDTH]; 6], [u32; 2]) {
     let mut rays = [const { MaybeUninit::uninit() }; WIDTH];
-    let (rays, lanes) = ray_lanes(origins, directions, &mut rays);
+    let packet = RayLanes::from_rays(origins, directions);
+    let (rays, lanes) = ray_lanes(&packet, directions.len(), &mut rays);
     let [ox, oy, oz] = lanes.origin.map(|v| spill(v));
     let [ix, iy, iz] = lanes.inverse.map(|v| spill(v));
     (
@@ -333,8 +335,8 @@ pub(crate) struct PacketLanes {
     pub z_wins: u32,
 }
 
-/// [`RayData::new`] for a packet of up to [`WIDTH`] rays at once, written to the first
-/// `directions.len()` of `rays`, and the same rays as lanes (lanes past the last ray repeat
+/// [`RayData::new`] for the first `n` rays of `packet` (1 to [`WIDTH`]) at once, written to
+/// the first `n` of `rays`, and the same rays as vectors (lanes past the last ray repeat
 /// it): the six divisions per ray (three reciprocals, the shear's two quotients and `1/d_z`)
 /// as six vector divisions, the axis permutation and the rows by compares and blends. The
 /// same IEEE operations in the same order as the scalar constructor, so every field is the
@@ -347,33 +349,15 @@ pub(crate) struct PacketLanes {
 /// The CPU must support AVX2: call it only from code compiled with it.
 #[inline(always)]
 pub(crate) unsafe fn ray_lanes<'r>(
-    origins: &[glam::Vec3],
-    directions: &[glam::Vec3],
+    packet: &RayLanes,
+    n: usize,
     rays: &'r mut [MaybeUninit<RayData>; WIDTH],
 ) -> (&'r [RayData], PacketLanes) {
-    let n = directions.len();
-    debug_assert!(
-        (1..=WIDTH).contains(&n) && origins.len() == n,
-        "cast_packet checks"
-    );
-    let mut lanes = [[0.0f32; WIDTH]; 6];
-    for i in 0..WIDTH {
-        let (o, d) = (origins[i.min(n - 1)], directions[i.min(n - 1)]);
-        lanes[0][i] = d.x;
-        lanes[1][i] = d.y;
-        lanes[2][i] = d.z;
-        lanes[3][i] = o.x;
-        lanes[4][i] = o.y;
-        lanes[5][i] = o.z;
-    }
-    let x = _mm256_loadu_ps(lanes[0].as_ptr());
-    let y = _mm256_loadu_ps(lanes[1].as_ptr());
-    let z = _mm256_loadu_ps(lanes[2].as_ptr());
-    let origin = [
-        _mm256_loadu_ps(lanes[3].as_ptr()),
-        _mm256_loadu_ps(lanes[4].as_ptr()),
-        _mm256_loadu_ps(lanes[5].as_ptr()),
-    ];
+    debug_assert!((1..=WIDTH).contains(&n), "cast_packet checks");
+    let x = _mm256_loadu_ps(packet.direction[0].as_ptr());
+    let y = _mm256_loadu_ps(packet.direction[1].as_ptr());
+    let z = _mm256_loadu_ps(packet.direction[2].as_ptr());
+    let origin = packet.origin.map(|axis| _mm256_loadu_ps(axis.as_ptr()));
     let inv = [
         reciprocal(safe_divisor(x)),
         reciprocal(safe_divisor(y)),
@@ -407,7 +391,7 @@ pub(crate) unsafe fn ray_lanes<'r>(
     let axes = spill_indices(_mm256_or_si256(bit(y_wins, 1), bit(z_wins, 2)));
     let (y_wins, z_wins) = (mask(y_wins), mask(z_wins));
     for (i, ray) in rays[..n].iter_mut().enumerate() {
-        let origin = origins[i].to_array();
+        let origin = packet.origin(i).to_array();
         // kz = 2 where z won (y may have won against x too: 1 | 2 = 3, the same entry).
         let [kx, ky, kz] = PERMUTATION[axes[i] as usize];
         let (near_row, far_row) = ROWS[signs[i] as usize];

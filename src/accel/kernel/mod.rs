@@ -48,6 +48,12 @@ impl Kernel {
         }
     }
 
+    /// Whether the kernel traverses packets of rays ([`crate::accel::PACKET`] lanes): the
+    /// AVX2 kernels, on x86-64.
+    pub fn has_packets(self) -> bool {
+        cfg!(target_arch = "x86_64") && matches!(self, Kernel::Avx2 | Kernel::Avx512)
+    }
+
     /// Whether this CPU can run the kernel.
     pub fn available(self) -> bool {
         match self {
