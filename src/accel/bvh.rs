@@ -258,8 +258,6 @@ impl Accel {
         {
             use super::packet::{closest_packet_avx2, closest_packet_avx512, PacketEntry};
             use super::traverse::Search;
-            // SAFETY: both kernels imply AVX2, and `Kernel::best`/`with_kernel` only choose
-            // kernels the CPU has.
             let accept: [_; PACKET] = std::array::from_fn(|i| {
                 let leaving = leaving[i.min(n - 1)];
                 move |block: u32, lane: usize| self.may_take_within_error_hit(leaving, block, lane)
@@ -271,12 +269,15 @@ impl Accel {
             let stack = self.stack(&mut inline, &mut heap);
             let packet_stack = self.stack(&mut inline_packet, &mut heap_packet);
             let (bvh, searches) = (&self.bvh, &mut searches[..n]);
-            // SAFETY: `Kernel::best` and `with_kernel` only choose kernels the CPU has.
+            // SAFETY: `Kernel::best` and `with_kernel` only choose kernels the CPU has, and
+            // both packet kernels imply AVX2.
             unsafe {
-                if self.kernel == Kernel::Avx2 {
-                    closest_packet_avx2(bvh, packet, searches, packet_stack, stack, counter);
-                } else {
-                    closest_packet_avx512(bvh, packet, searches, packet_stack, stack, counter);
+                match self.kernel {
+                    Kernel::Avx2 => closest_packet_avx2(bvh, packet, searches, packet_stack, stack, counter),
+                    Kernel::Avx512 => {
+                        closest_packet_avx512(bvh, packet, searches, packet_stack, stack, counter)
+                    }
+                    Kernel::Scalar => unreachable!("cast_lanes needs a packet kernel (Kernel::has_packets)"),
                 }
             }
             for (out, search) in out.iter_mut().zip(searches.iter()) {
@@ -284,7 +285,10 @@ impl Accel {
             }
         }
         #[cfg(not(target_arch = "x86_64"))]
-        unreachable!("no packet kernel on this architecture: {packet:?} {n} {t_max} {out:?} {counter:?}");
+        {
+            let _ = (packet, n, t_max, out, counter);
+            unreachable!("no packet kernel on this architecture (Kernel::has_packets)");
+        }
     }
 
     /// A traversal stack of [`stack_size`] entries for this BVH: `inline` (on the thread's
