@@ -275,6 +275,19 @@ pub fn in_stratum((i, k): (u32, u32), (a, b): (u32, u32), xi: Vec2) -> Vec2 {
     )
 }
 
+/// [`in_stratum`] of eight strata `(strata[0][l], strata[1][l])` jittered by
+/// `(xi[0][l], xi[1][l])`, as lanes (x, then y): the same bits, in a loop the compiler
+/// vectorises.
+#[inline(always)]
+pub fn in_stratum_lanes(strata: &[[u32; 8]; 2], (a, b): (u32, u32), xi: &[[f32; 8]; 2]) -> [[f32; 8]; 2] {
+    let mut u = [[0.0f32; 8]; 2];
+    for l in 0..8 {
+        u[0][l] = ((strata[0][l] as f32 + xi[0][l]) / a as f32).min(1.0 - f32::EPSILON);
+        u[1][l] = ((strata[1][l] as f32 + xi[1][l]) / b as f32).min(1.0 - f32::EPSILON);
+    }
+    u
+}
+
 /// A unit direction in the local frame (z = normal) from a point of the unit square.
 /// Cosine: `θ = asin √u, φ = 2πv`. Uniform: `cos θ = 1 − u, φ = 2πv`.
 #[inline(always)]

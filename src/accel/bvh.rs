@@ -434,9 +434,7 @@ impl RayCaster for Accel {
         if len >= 2 && self.kernel.has_packets() {
             self.cast_lanes(rays, &[leaving; PACKET][..len], t_max, out, &mut ());
         } else {
-            for (i, out) in out.iter_mut().enumerate().take(len) {
-                *out = self.hit_distance(rays.origin(i), rays.direction(i), t_max, leaving);
-            }
+            super::lanes_one_by_one(self, rays, len, leaving, t_max, out);
         }
     }
 }

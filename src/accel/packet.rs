@@ -216,13 +216,13 @@ unsafe fn traverse<C: Counter>(
     let n = rays.len();
     debug_assert!((1..=PACKET).contains(&n) && searches.len() == n);
     // Lane r holds ray r; spare lanes repeat the last ray and are never active.
-    let PacketLanes { origin, inverse, .. } = lanes;
+    let PacketLanes {
+        origin,
+        inverse,
+        negative,
+        ..
+    } = lanes;
     let zero = _mm256_setzero_ps();
-    let negative = [
-        _mm256_cmp_ps::<_CMP_LT_OQ>(inverse[0], zero),
-        _mm256_cmp_ps::<_CMP_LT_OQ>(inverse[1], zero),
-        _mm256_cmp_ps::<_CMP_LT_OQ>(inverse[2], zero),
-    ];
     let far_scale = _mm256_set1_ps(FAR_SCALE);
     let mut best = [f32::NEG_INFINITY; PACKET];
     for r in 0..n {

@@ -27,7 +27,8 @@ use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::report::{Details, DeviceDetails, GatherParameters, Parameters};
 use crate::sampling::{
-    hemisphere, hemisphere_lanes, in_stratum, strata, Frame, Progressive, Sampler, Stream, Weighting,
+    hemisphere, hemisphere_lanes, in_stratum, in_stratum_lanes, strata, Frame, Progressive, Sampler, Stream,
+    Weighting,
 };
 
 /// Default gather rays per pixel for `hmdist render`: an 8 × 8 stratified grid, a clean
@@ -595,21 +596,14 @@ impl GridBlocks {
     #[inline(always)]
     fn block(&self, column: u32, row: u32) -> ([[f32; PACKET]; 3], [f32; PACKET]) {
         const { assert!(PACKET == 8) };
-        let (a, b) = self.grid;
-        let mut u = [[0.0f32; PACKET]; 2];
+        let a = self.grid.0;
+        let (mut strata, mut xi) = ([[0u32; PACKET]; 2], [[0.0f32; PACKET]; 2]);
         for q in 0..PACKET {
             let (i, k) = (column + q as u32 % 4, row + q as u32 / 4);
-            let xi = self.random.pair(self.first + k as u64 * a as u64 + i as u64);
-            u[0][q] = i as f32 + xi.x;
-            u[1][q] = k as f32 + xi.y;
+            let pair = self.random.pair(self.first + k as u64 * a as u64 + i as u64);
+            (strata[0][q], strata[1][q], xi[0][q], xi[1][q]) = (i, k, pair.x, pair.y);
         }
-        // `in_stratum`, lane by lane.
-        let (a, b) = (a as f32, b as f32);
-        for q in 0..PACKET {
-            u[0][q] = (u[0][q] / a).min(1.0 - f32::EPSILON);
-            u[1][q] = (u[1][q] / b).min(1.0 - f32::EPSILON);
-        }
-        let local = hemisphere_lanes(self.weighting, &u);
+        let local = hemisphere_lanes(self.weighting, &in_stratum_lanes(&strata, self.grid, &xi));
         (self.frame.to_world_lanes(&local), local[2])
     }
 }
@@ -896,14 +890,15 @@ impl PointGather {
         } else {
             grouping.span as usize
         };
-        let (mut distances, mut local) = (vec![0.0f32; span], vec![Vec3::ZERO; span]);
+        // The grid in 4 × 2 blocks (nearly always): each block's directions made as lanes
+        // and cast as they are, without `local`.
+        let blocks = (self.sampler == Sampler::Grid && grouping.blocks)
+            .then(|| GridBlocks::new(self.weighting, (seed, key), self.rounds, n, start.frame));
+        let local_len = if blocks.is_some() { 0 } else { span };
+        let (mut distances, mut local) = (vec![0.0f32; span], vec![Vec3::ZERO; local_len]);
         // The rays' local z (cos θ), for the AO weights.
         let mut cos_theta = vec![0.0f32; span];
         let (origins, leaving) = ([start.origin; PACKET], [start.leaving; PACKET]);
-        // The grid in 4 × 2 blocks (nearly always): each block's directions made as lanes
-        // and cast as they are.
-        let blocks = (self.sampler == Sampler::Grid && grouping.blocks)
-            .then(|| GridBlocks::new(self.weighting, (seed, key), self.rounds, n, start.frame));
         let mut lanes = RayLanes {
             origin: start.origin.to_array().map(|o| [o; PACKET]),
             direction: [[0.0; PACKET]; 3],

@@ -329,6 +329,8 @@ pub(crate) struct PacketLanes {
     pub origin: [__m256; 3],
     /// [`RayData::inv_direction`] per axis.
     pub inverse: [__m256; 3],
+    /// All bits set where `inverse < 0`, per axis (the rays' near plane is the max one).
+    pub negative: [__m256; 3],
     /// Bit per lane: the watertight test's dominant axis `kz` is z (`z_wins`), else y
     /// (`y_wins`), else x.
     pub y_wins: u32,
@@ -358,11 +360,13 @@ pub(crate) unsafe fn ray_lanes<'r>(
     let y = _mm256_loadu_ps(packet.direction[1].as_ptr());
     let z = _mm256_loadu_ps(packet.direction[2].as_ptr());
     let origin = packet.origin.map(|axis| _mm256_loadu_ps(axis.as_ptr()));
-    let inv = [
+    let inverse = [
         reciprocal(safe_divisor(x)),
         reciprocal(safe_divisor(y)),
         reciprocal(safe_divisor(z)),
     ];
+    // `1/d < 0` per axis (false for NaN, as the scalar comparison).
+    let negative = inverse.map(|v| _mm256_cmp_ps::<_CMP_LT_OQ>(v, _mm256_setzero_ps()));
     // kz: glam's max_position of |d| (x, then y if greater, then z if greater than that).
     let (ax, ay, az) = (abs(x), abs(y), abs(z));
     let y_wins = _mm256_cmp_ps::<_CMP_GT_OQ>(ay, ax);
@@ -372,21 +376,19 @@ pub(crate) unsafe fn ray_lanes<'r>(
     let dy = pick(z, x, y, y_wins, z_wins);
     let dz = pick(x, y, z, y_wins, z_wins);
     let sign = splat(-0.0);
-    let inverse = inv;
-    let inv = [spill(inv[0]), spill(inv[1]), spill(inv[2])];
+    let inv = inverse.map(|v| spill(v));
     let shear = [
         spill(_mm256_div_ps(_mm256_xor_ps(dx, sign), dz)),
         spill(_mm256_div_ps(_mm256_xor_ps(dy, sign), dz)),
         spill(reciprocal(dz)),
     ];
     // Per lane, the rows and the permutation from small tables: the sign bits of the three
-    // axes (bit `axis` where `inverse[axis] < 0`, false for NaN as the scalar comparison)
-    // index the rows, kz the permutation. Both indices found for all lanes at once.
+    // axes (bit `axis` where `negative[axis]`) index the rows, kz the permutation. Both
+    // indices found for all lanes at once.
     let bit = |v: __m256, value: i32| _mm256_and_si256(_mm256_castps_si256(v), _mm256_set1_epi32(value));
-    let below = |v: __m256| _mm256_cmp_ps::<_CMP_LT_OQ>(v, _mm256_setzero_ps());
     let signs = spill_indices(_mm256_or_si256(
-        bit(below(inverse[0]), 1),
-        _mm256_or_si256(bit(below(inverse[1]), 2), bit(below(inverse[2]), 4)),
+        bit(negative[0], 1),
+        _mm256_or_si256(bit(negative[1], 2), bit(negative[2], 4)),
     ));
     let axes = spill_indices(_mm256_or_si256(bit(y_wins, 1), bit(z_wins, 2)));
     let (y_wins, z_wins) = (mask(y_wins), mask(z_wins));
@@ -415,6 +417,7 @@ pub(crate) unsafe fn ray_lanes<'r>(
     let lanes = PacketLanes {
         origin,
         inverse,
+        negative,
         y_wins,
         z_wins,
     };
