@@ -5,7 +5,8 @@
 //! triangle, and for each ray count N: gather Mrays/s with all cores and with one thread,
 //! node visits per ray (single-ray and packet: a packet visit tests the node for up to 8
 //! rays) and leaf blocks per ray, and the nanoseconds per ray of generating the directions,
-//! casting them and summing 1/d, timed apart on one thread. Environment:
+//! casting them and summing 1/d, timed apart on one thread, made and cast as `render` makes
+//! and casts them (4 × 2 blocks of strata as lanes where the grid splits so). Environment:
 //! `HMDIST_BENCH_SCENES=cube,hall` (default), `HMDIST_BENCH_SIZE=256` (image side),
 //! `HMDIST_BENCH_RAYS=64,256,4096` (N; fewer pixels are used for large N so that each run
 //! casts about 16.8 M rays), `HMDIST_BENCH_PRESETS=fast,high`, `HMDIST_BENCH_KERNELS=` (e.g.
@@ -20,12 +21,11 @@
 
 use std::time::Instant;
 
-use glam::Vec3;
-use hmdist::accel::{Accel, BuildQuality, Kernel, TraversalStats, PACKET};
+use hmdist::accel::{Accel, BuildQuality, Kernel, RayLanes, TraversalStats, PACKET};
 use hmdist::estimators::{DistanceClamp, EstimateContext, GBuffer, Gather, HarmonicMean};
 use hmdist::progress::Silent;
 use hmdist::render::primary_hits;
-use hmdist::sampling::{strata, Weighting};
+use hmdist::sampling::Weighting;
 use hmdist::scene::Scene;
 
 fn list(name: &str, default: &str) -> Vec<String> {
@@ -199,50 +199,63 @@ fn stats_rays(gbuffer: &GBuffer, rays: u32) -> u64 {
 }
 
 /// Nodes (single-ray and packet visits) and leaf blocks visited by the same gather rays as
-/// the estimator casts, cast as it casts them (packets of 4 × 2 neighbouring strata, else 8
-/// in ray order); and the nanoseconds per ray, on one thread, of the gather's three parts
-/// timed apart: generate (random numbers, strata, the cosine map, the frame), cast, and sum
-/// (clamp, 1/d in f64 in ray order).
+/// the estimator casts, made and cast as it makes and casts them (4 × 2 blocks of strata as
+/// lanes, [`Gather::ray_blocks`], where the grid splits so, else 8 in ray order); and the
+/// nanoseconds per ray, on one thread, of the gather's three parts timed apart: generate
+/// (random numbers, strata, the cosine map, the frame), cast, and sum (clamp, 1/d in f64 in
+/// ray order).
 fn traversal(accel: &Accel, gbuffer: &GBuffer, rays: u32) -> (TraversalStats, [f64; 3]) {
-    let (a, b) = strata(rays);
-    let blocks = a % 4 == 0 && b % 2 == 0;
     let n = rays as usize;
     let pixels: Vec<_> = stats_pixels(gbuffer).collect();
-    let mut directions = vec![Vec3::ZERO; pixels.len() * n];
     let gather = Gather::new(rays, Weighting::Cosine).unwrap();
+    // Per pixel its origin, and its rays as blocks of lanes (with their indices) or in order.
+    let mut origins = Vec::with_capacity(pixels.len());
+    let mut blocks = Vec::new();
+    let mut directions = Vec::new();
     let start = Instant::now();
-    for ((pixel, hit), dirs) in pixels.iter().zip(directions.chunks_mut(n)) {
-        for (d, w) in dirs.iter_mut().zip(gather.rays(hit, 1, *pixel as u64).1) {
-            *d = w;
+    for &(pixel, hit) in &pixels {
+        if let Some((origin, rays)) = gather.ray_blocks(hit, 1, pixel as u64) {
+            origins.push(origin);
+            blocks.extend(rays);
+        } else {
+            let (origin, rays) = gather.rays(hit, 1, pixel as u64);
+            origins.push(origin);
+            directions.extend(rays);
         }
     }
     let generate = start.elapsed().as_secs_f64();
     let mut stats = TraversalStats::default();
-    let mut distances = vec![0.0f32; directions.len()];
+    let mut distances = vec![0.0f32; pixels.len() * n];
     let mut cast = |stats: &mut TraversalStats| {
-        for ((_, hit), (dirs, out)) in pixels
-            .iter()
-            .zip(directions.chunks(n).zip(distances.chunks_mut(n)))
-        {
-            let origin = hit.spawn_origin(hit.normal);
-            let (origins, leaving) = ([origin; PACKET], [Some(hit.triangle); PACKET]);
-            let mut t = [0.0f32; PACKET];
-            if blocks {
-                for k in (0..b as usize).step_by(2) {
-                    for i in (0..a as usize).step_by(4) {
-                        let index: [usize; PACKET] =
-                            std::array::from_fn(|q| (k + q / 4) * a as usize + i + q % 4);
-                        let d = index.map(|j| dirs[j]);
-                        accel.hit_distances_counted(&origins, &d, &leaving, f32::INFINITY, &mut t, stats);
-                        for (q, j) in index.into_iter().enumerate() {
-                            out[j] = t[q];
-                        }
-                    }
-                }
-            } else {
+        let mut t = [0.0f32; PACKET];
+        for (p, ((_, hit), out)) in pixels.iter().zip(distances.chunks_mut(n)).enumerate() {
+            let origin = origins[p];
+            if blocks.is_empty() {
+                let (origins, leaving) = ([origin; PACKET], [Some(hit.triangle); PACKET]);
+                let dirs = &directions[p * n..(p + 1) * n];
                 for (d, out) in dirs.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
                     let k = d.len();
                     accel.hit_distances_counted(&origins[..k], d, &leaving[..k], f32::INFINITY, out, stats);
+                }
+            } else {
+                let mut lanes = RayLanes {
+                    origin: origin.to_array().map(|o| [o; PACKET]),
+                    direction: [[0.0; PACKET]; 3],
+                };
+                for (direction, index) in &blocks[p * (n / PACKET)..(p + 1) * (n / PACKET)] {
+                    lanes.direction = *direction;
+                    let leaving = Some(hit.triangle);
+                    accel.hit_distances_of_lanes_counted(
+                        &lanes,
+                        PACKET,
+                        leaving,
+                        f32::INFINITY,
+                        &mut t,
+                        stats,
+                    );
+                    for (&t, &j) in t.iter().zip(index) {
+                        out[j as usize] = t;
+                    }
                 }
             }
         }
@@ -263,6 +276,6 @@ fn traversal(accel: &Accel, gbuffer: &GBuffer, rays: u32) -> (TraversalStats, [f
     }
     std::hint::black_box(h);
     let sum = start.elapsed().as_secs_f64();
-    let ns = |s: f64| s * 1e9 / directions.len() as f64;
+    let ns = |s: f64| s * 1e9 / distances.len() as f64;
     (stats, [ns(generate), ns(cast_seconds), ns(sum)])
 }

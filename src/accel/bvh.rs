@@ -206,6 +206,49 @@ impl Accel {
         self.cast_packet(origins, directions, leaving, t_max, out, stats);
     }
 
+    /// [`RayCaster::hit_distances_of_lanes`], counting the nodes (once per packet visit) and
+    /// leaf blocks (once per ray) it visits.
+    pub fn hit_distances_of_lanes_counted(
+        &self,
+        rays: &RayLanes,
+        len: usize,
+        leaving: Option<u32>,
+        t_max: f32,
+        out: &mut [f32],
+        stats: &mut TraversalStats,
+    ) {
+        self.cast_lanes_checked(rays, len, leaving, t_max, out, stats);
+    }
+
+    /// The first `len` rays of `rays` (at most [`PACKET`]), all leaving `leaving`: as a packet
+    /// where the kernel has one, else ray by ray.
+    #[inline]
+    fn cast_lanes_checked<C: Counter>(
+        &self,
+        rays: &RayLanes,
+        len: usize,
+        leaving: Option<u32>,
+        t_max: f32,
+        out: &mut [f32],
+        counter: &mut C,
+    ) {
+        assert!(
+            len <= PACKET && out.len() >= len,
+            "hit_distances_of_lanes: {len} rays (at most {PACKET}), {} outputs",
+            out.len()
+        );
+        if len >= 2 && self.kernel.has_packets() {
+            self.cast_lanes(rays, &[leaving; PACKET][..len], t_max, out, counter);
+            return;
+        }
+        for (i, out) in out[..len].iter_mut().enumerate() {
+            let ray = RayData::new(rays.origin(i), rays.direction(i));
+            *out = self
+                .trace(&ray, t_max, leaving, counter)
+                .map_or(f32::INFINITY, |c| c.t);
+        }
+    }
+
     /// Up to [`PACKET`] rays: as a packet where the kernel has one, else ray by ray.
     #[inline]
     fn cast_packet<C: Counter>(
@@ -426,16 +469,7 @@ impl RayCaster for Accel {
         t_max: f32,
         out: &mut [f32],
     ) {
-        assert!(
-            len <= PACKET && out.len() >= len,
-            "hit_distances_of_lanes: {len} rays (at most {PACKET}), {} outputs",
-            out.len()
-        );
-        if len >= 2 && self.kernel.has_packets() {
-            self.cast_lanes(rays, &[leaving; PACKET][..len], t_max, out, &mut ());
-        } else {
-            super::lanes_one_by_one(self, rays, len, leaving, t_max, out);
-        }
+        self.cast_lanes_checked(rays, len, leaving, t_max, out, &mut ());
     }
 }
 
