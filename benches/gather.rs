@@ -224,14 +224,15 @@ fn traversal(accel: &Accel, gbuffer: &GBuffer, rays: u32) -> (TraversalStats, [f
         }
     }
     let generate = start.elapsed().as_secs_f64();
+    let in_blocks = !blocks.is_empty();
     let mut stats = TraversalStats::default();
     let mut distances = vec![0.0f32; pixels.len() * n];
     let mut cast = |stats: &mut TraversalStats| {
         let mut t = [0.0f32; PACKET];
         for (p, ((_, hit), out)) in pixels.iter().zip(distances.chunks_mut(n)).enumerate() {
-            let origin = origins[p];
-            if blocks.is_empty() {
-                let (origins, leaving) = ([origin; PACKET], [Some(hit.triangle); PACKET]);
+            let (origin, leaving) = (origins[p], Some(hit.triangle));
+            if !in_blocks {
+                let (origins, leaving) = ([origin; PACKET], [leaving; PACKET]);
                 let dirs = &directions[p * n..(p + 1) * n];
                 for (d, out) in dirs.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
                     let k = d.len();
@@ -244,7 +245,6 @@ fn traversal(accel: &Accel, gbuffer: &GBuffer, rays: u32) -> (TraversalStats, [f
                 };
                 for (direction, index) in &blocks[p * (n / PACKET)..(p + 1) * (n / PACKET)] {
                     lanes.direction = *direction;
-                    let leaving = Some(hit.triangle);
                     accel.hit_distances_of_lanes_counted(
                         &lanes,
                         PACKET,
