@@ -188,7 +188,21 @@ impl Accel {
         leaving: Option<u32>,
         stats: &mut TraversalStats,
     ) -> f32 {
-        self.trace(&RayData::new(origin, direction), t_max, leaving, stats)
+        self.distance(origin, direction, t_max, leaving, stats)
+    }
+
+    /// One ray's hit distance (`+inf` if it escapes), counted by `counter`: every ray-by-ray
+    /// path of the distance queries.
+    #[inline(always)]
+    fn distance<C: Counter>(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        t_max: f32,
+        leaving: Option<u32>,
+        counter: &mut C,
+    ) -> f32 {
+        self.trace(&RayData::new(origin, direction), t_max, leaving, counter)
             .map_or(f32::INFINITY, |c| c.t)
     }
 
@@ -242,10 +256,7 @@ impl Accel {
             return;
         }
         for (i, out) in out[..len].iter_mut().enumerate() {
-            let ray = RayData::new(rays.origin(i), rays.direction(i));
-            *out = self
-                .trace(&ray, t_max, leaving, counter)
-                .map_or(f32::INFINITY, |c| c.t);
+            *out = self.distance(rays.origin(i), rays.direction(i), t_max, leaving, counter);
         }
     }
 
@@ -274,14 +285,7 @@ impl Accel {
             return;
         }
         for i in 0..n {
-            out[i] = self
-                .trace(
-                    &RayData::new(origins[i], directions[i]),
-                    t_max,
-                    leaving[i],
-                    counter,
-                )
-                .map_or(f32::INFINITY, |c| c.t);
+            out[i] = self.distance(origins[i], directions[i], t_max, leaving[i], counter);
         }
     }
 
@@ -444,8 +448,7 @@ impl RayCaster for Accel {
 
     #[inline]
     fn hit_distance(&self, origin: Vec3, direction: Vec3, t_max: f32, leaving: Option<u32>) -> f32 {
-        self.trace(&RayData::new(origin, direction), t_max, leaving, &mut ())
-            .map_or(f32::INFINITY, |c| c.t)
+        self.distance(origin, direction, t_max, leaving, &mut ())
     }
 
     #[inline]

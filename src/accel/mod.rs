@@ -130,21 +130,9 @@ pub trait RayCaster: Sync {
         t_max: f32,
         out: &mut [f32],
     ) {
-        lanes_one_by_one(self, rays, len, leaving, t_max, out);
-    }
-}
-
-/// [`RayCaster::hit_distances_of_lanes`] ray by ray, with [`RayCaster::hit_distance`].
-fn lanes_one_by_one<R: RayCaster + ?Sized>(
-    caster: &R,
-    rays: &RayLanes,
-    len: usize,
-    leaving: Option<u32>,
-    t_max: f32,
-    out: &mut [f32],
-) {
-    for (i, out) in out.iter_mut().enumerate().take(len) {
-        *out = caster.hit_distance(rays.origin(i), rays.direction(i), t_max, leaving);
+        for (i, out) in out.iter_mut().enumerate().take(len) {
+            *out = self.hit_distance(rays.origin(i), rays.direction(i), t_max, leaving);
+        }
     }
 }
 

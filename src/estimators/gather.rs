@@ -312,20 +312,19 @@ impl Gather {
         Vec3,
         impl Iterator<Item = ([[f32; PACKET]; 3], [u32; PACKET])> + '_,
     )> {
-        let grouping = sampler_packets(self.sampler, self.rays);
-        if self.sampler != Sampler::Grid || !grouping.blocks {
+        let (a, b) = strata(self.rays);
+        if self.sampler != Sampler::Grid || !packets((a, b)).blocks {
             return None;
         }
         let start = GatherStart::at_hit(hit);
         let blocks = GridBlocks::new(self.weighting, (seed, pixel), 0, self.rays, start.frame);
-        let (a, b) = strata(self.rays);
         let corners = (0..b)
             .step_by(2)
             .flat_map(move |row| (0..a).step_by(4).map(move |column| (column, row)));
         Some((
             start.origin,
             corners.map(move |(column, row)| {
-                let index = std::array::from_fn(|q| (row + q as u32 / 4) * a + column + q as u32 % 4);
+                let index = std::array::from_fn(|q| row * a + blocks.lane_offset(column, q) as u32);
                 (blocks.block(column, row).0, index)
             }),
         ))
@@ -623,6 +622,13 @@ impl GridBlocks {
             first: round as u64 * n as u64,
             frame,
         }
+    }
+
+    /// Lane `q` of the block at `column`: its ray's index counted from the first ray of the
+    /// block's first row, `(q div 4)·a + column + q mod 4`.
+    #[inline(always)]
+    fn lane_offset(&self, column: u32, q: usize) -> usize {
+        (q / 4) * self.grid.0 as usize + column as usize + q % 4
     }
 
     /// The directions of strata `(column + q mod 4, row + q div 4)`, lane `q` (`column` a
@@ -954,7 +960,6 @@ impl PointGather {
             .map(|base| (base, span.min((n - base) as usize)))
         {
             if let Some(blocks) = &blocks {
-                let a = grouping.a as usize;
                 let row = base / grouping.a;
                 for column in (0..grouping.a).step_by(4) {
                     let (world, z) = blocks.block(column, row);
@@ -962,7 +967,7 @@ impl PointGather {
                     let mut t = [0.0f32; PACKET];
                     accel.hit_distances_of_lanes(&lanes, PACKET, start.leaving, clamp.max, &mut t);
                     for q in 0..PACKET {
-                        let j = (q / 4) * a + column as usize + q % 4;
+                        let j = blocks.lane_offset(column, q);
                         distances[j] = t[q];
                         cos_theta[j] = z[q];
                     }
