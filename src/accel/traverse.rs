@@ -62,7 +62,7 @@
 use std::mem::MaybeUninit;
 
 use super::kernel::{BlockHits, Lanes, RayData, FAR_SCALE};
-use super::wide::{WideBvh, EMPTY, LEAF, WIDTH};
+use super::wide::{Block, WideBvh, EMPTY, LEAF, WIDTH};
 
 /// A traversal stack entry: a child reference and its near distance.
 #[derive(Clone, Copy, Debug, Default)]
@@ -309,21 +309,26 @@ pub(crate) fn descend<K: Lanes, C: Counter>(
 }
 
 /// Asks for node or leaf block `reference` (all its cache lines) to be brought into the cache.
+///
+/// Without a branch: whether a hit child is a node or a leaf block cannot be predicted, so the
+/// address is chosen by a conditional move and the larger object's lines (a node takes four,
+/// a block five) are asked for either way. `cube` 256² × 256, 2 threads: 1.3 % faster (5
+/// interleaved pairs of `render`, every pair), 1.3 fewer mispredicted branches per ray
+/// (cachegrind's model, 64² × 256).
 #[inline(always)]
 fn prefetch(bvh: &WideBvh, reference: u32) {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        let (start, bytes) = if reference & LEAF != 0 {
-            let block = &bvh.blocks[(reference & !LEAF) as usize];
-            (block as *const _ as *const i8, std::mem::size_of_val(block))
-        } else {
-            let node = &bvh.nodes[reference as usize];
-            (node as *const _ as *const i8, std::mem::size_of_val(node))
-        };
-        for line in (0..bytes).step_by(64) {
-            // SAFETY: prefetching is only a hint; the address lies inside the object.
-            unsafe { _mm_prefetch::<_MM_HINT_T0>(start.add(line)) };
+        const LINES: usize = std::mem::size_of::<Block>().div_ceil(64);
+        let index = (reference & !LEAF) as usize;
+        // Neither pointer is dereferenced, so an index past one of the arrays is harmless.
+        let node = bvh.nodes.as_ptr().wrapping_add(index) as *const i8;
+        let block = bvh.blocks.as_ptr().wrapping_add(index) as *const i8;
+        let start = std::hint::select_unpredictable(reference & LEAF != 0, block, node);
+        for line in 0..LINES {
+            // SAFETY: prefetching is only a hint; it never faults, whatever the address.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(start.wrapping_add(line * 64)) };
         }
     }
 }
