@@ -80,6 +80,7 @@ pub mod report;
 pub mod sampling;
 pub mod scene;
 pub mod shard;
+pub mod sincos;
 
 /// The README's Rust examples, run as doctests so that they stay true.
 #[cfg(doctest)]

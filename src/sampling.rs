@@ -299,14 +299,14 @@ pub fn hemisphere(weighting: Weighting, u: Vec2) -> Vec3 {
             ((1.0 - c * c).max(0.0).sqrt(), c)
         }
     };
-    let (sin_phi, cos_phi) = (2.0 * PI * u.y).sin_cos();
+    let (sin_phi, cos_phi) = crate::sincos::sin_cos(2.0 * PI * u.y);
     Vec3::new(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta)
 }
 
 /// [`hemisphere`] of eight points of the unit square at once, `u[0]` their x and `u[1]` their
 /// y, as lanes (x, y, z): the same bits. The square roots and products run a vector at a time
 /// (plain loops that the compiler vectorises: the same IEEE operations lane by lane), the
-/// sines and cosines one by one (`sin_cos`, as `hemisphere` calls it).
+/// sines and cosines eight at a time ([`crate::sincos::sin_cos_lanes`]).
 #[inline(always)]
 pub fn hemisphere_lanes(weighting: Weighting, u: &[[f32; 8]; 2]) -> [[f32; 8]; 3] {
     let (mut sin_theta, mut cos_theta) = ([0.0f32; 8], [0.0f32; 8]);
@@ -325,10 +325,11 @@ pub fn hemisphere_lanes(weighting: Weighting, u: &[[f32; 8]; 2]) -> [[f32; 8]; 3
             }
         }
     }
-    let (mut sin_phi, mut cos_phi) = ([0.0f32; 8], [0.0f32; 8]);
+    let mut phi = [0.0f32; 8];
     for l in 0..8 {
-        (sin_phi[l], cos_phi[l]) = (2.0 * PI * u[1][l]).sin_cos();
+        phi[l] = 2.0 * PI * u[1][l];
     }
+    let (sin_phi, cos_phi) = crate::sincos::sin_cos_lanes(&phi);
     let mut v = [[0.0f32; 8]; 3];
     for l in 0..8 {
         v[0][l] = cos_phi[l] * sin_theta[l];

@@ -186,7 +186,7 @@ impl PhotonSource {
                 let cos_alpha = light.cone_half_angle_deg.to_radians().cos();
                 let cos_theta = 1.0 - u.x * (1.0 - cos_alpha);
                 let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
-                let (sin_phi, cos_phi) = (2.0 * PI * u.y).sin_cos();
+                let (sin_phi, cos_phi) = crate::sincos::sin_cos(2.0 * PI * u.y);
                 let local = Vec3::new(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta);
                 (
                     light.position,
