@@ -133,15 +133,15 @@ unsafe fn lanes_avx2(y: &[f32; 8]) -> ([f32; 8], [f32; 8]) {
             _mm_set1_epi32(0x80_0000),
         ));
         let r = _mm256_fnmadd_pd(_mm256_cvtepi32_pd(n), splat(HPI), x);
-        // Sign bits (bit 63 of each f64 lane) from the quadrant's bits.
+        // Sign bits (bit 63 of each f64 lane) from the quadrant's bits: bit 0 of n ^ (n >> 1)
+        // for the sine's argument, bit 1 of n for the cosine polynomial.
         let n64 = _mm256_cvtepi32_epi64(n);
         let sine_negated = _mm256_castsi256_pd(_mm256_slli_epi64::<63>(_mm256_xor_si256(
             n64,
             _mm256_srli_epi64::<1>(n64),
         )));
-        let cosine_negated = _mm256_castsi256_pd(_mm256_slli_epi64::<62>(n64));
-        let r_signed = _mm256_xor_pd(r, _mm256_and_pd(sine_negated, sign));
-        let flip = _mm256_and_pd(cosine_negated, sign);
+        let r_signed = _mm256_xor_pd(r, sine_negated);
+        let flip = _mm256_and_pd(_mm256_castsi256_pd(_mm256_slli_epi64::<62>(n64)), sign);
         let c = |k: usize| _mm256_xor_pd(splat(C[k]), flip);
         let x2 = _mm256_mul_pd(r, r);
         let x3 = _mm256_mul_pd(x2, r_signed);
