@@ -12,6 +12,24 @@
 //! spatial pre-splits of large triangles can be added (`pre_split`); on `cube` and `hall`
 //! they did not pay, so the `fast` preset leaves them out.
 //!
+//! **Where `high` traces faster, and what did not close the gap** (2026-12-05, `gather_rays
+//! stats` on the 256² × 256 rays of `benches/embree/compare.sh`, render's 4 × 2 packets:
+//! single-ray + packet node visits and leaf blocks per ray). `cube`: `fast` 2.38 + 0.79 and
+//! 1.97 blocks, `high` 1.90 + 0.79 and 1.96; `hall`: 3.19 + 0.93 and 1.81, `high` 2.96 +
+//! 0.80 and 1.80. So the gap (`render` of `cube`: 1.53 s against 1.43 s) is in the nodes above
+//! the blocks, not in the blocks. Tried on the `fast` tree:
+//! - obvhs's reinsertion optimiser on the binary tree before the collapse: batch ratio 0.3
+//!   took `cube` to 2.20 + 0.75 (0.02: 2.30 + 0.77) for 24 ms more build, and `render` 3–4 %
+//!   faster (7 interleaved pairs, twice); on `hall` 0.1 changed nothing for 67 ms more, 0.3
+//!   had not finished after 20 minutes, and 1.0 on `cube` overflowed a thread's stack (the
+//!   tree of one-triangle leaves grows deep). Not robust enough to keep.
+//! - More bins at the top (64, 128, 256 where the node is large enough): node visits −1 to
+//!   −4 %, but blocks +3 to +4 %.
+//! - Pre-splits again: `cube` 2.36 + 0.80 and 2.04 blocks (more blocks), `hall` unchanged.
+//! - obvhs's `medium_build` and `slow_build` (PLOC, no or few whole-tree passes): 10 and 6
+//!   times the blocks per ray on `cube` (its large wall triangles); `very_slow_build` without
+//!   its spatial splits: 1.97 + 0.77 nodes but 2.09 blocks, in 0.23 s.
+//!
 //! The tree is the same for any thread count: each node's references are partitioned in
 //! place by the same rule, and a subtree's nodes go to a range of the node array fixed by its
 //! position, not by which thread built it.
