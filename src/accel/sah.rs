@@ -19,8 +19,9 @@
 //! 0.80 and 1.80. So the gap (`render` of `cube`: 1.53 s against 1.43 s) is in the nodes above
 //! the blocks, not in the blocks. Tried on the `fast` tree:
 //! - obvhs's reinsertion optimiser on the binary tree before the collapse: batch ratio 0.3
-//!   took `cube` to 2.20 + 0.75 (0.02: 2.30 + 0.77) for 24 ms more build, and `render` 3–4 %
-//!   faster (7 interleaved pairs, twice); on `hall` 0.1 changed nothing for 67 ms more, 0.3
+//!   took `cube` to 2.20 + 0.75 (0.02: 2.30 + 0.77) for 24 ms more build; `render` was 3 %
+//!   faster at 0.1 and 4 % at 0.3 (7 interleaved pairs each); on `hall` 0.1 changed nothing
+//!   for 67 ms more, 0.3
 //!   had not finished after 20 minutes, and 1.0 on `cube` overflowed a thread's stack (the
 //!   tree of one-triangle leaves grows deep). Not robust enough to keep.
 //! - More bins at the top (64, 128, 256 where the node is large enough): node visits −1 to

@@ -32,8 +32,9 @@
 //! every single-ray node test done twice 3.6 % (1.54 → 1.60 s). The second copy depends on
 //! nothing the traversal waits for, so the core runs it in the gaps of the first: the leaf
 //! tests' arithmetic takes about 8 % of the core's issue time and the node tests' about 4 %;
-//! most of a ray's time is the wait along node → mask → next node → block → `t`. A cheaper
-//! test would pay only by shortening that chain.
+//! most of a ray's time is the wait along node → mask → next node → block → `t`. Work added
+//! on that chain costs in full (the sort above); a cheaper test would pay only by shortening
+//! it.
 //!
 //! Hits within their own `t` error bound (see [`super::triangle`]) are kept aside and taken
 //! only if the ray finds nothing else, and only where `accept_within_error` allows (see
