@@ -78,10 +78,16 @@ fn quick_table1_on_cube_falls_with_rays_and_the_report_links_only_existing_files
     let links = hrefs(&html);
     assert!(links.iter().any(|l| l == "table1.csv"), "{links:?}");
     for link in &links {
-        assert!(
-            out.join(link).exists(),
-            "index.html links {link}, which does not exist"
-        );
+        match link.strip_prefix('#') {
+            Some(id) => assert!(
+                html.contains(&format!("id=\"{id}\"")),
+                "index.html links #{id}, no such section"
+            ),
+            None => assert!(
+                out.join(link).exists(),
+                "index.html links {link}, which does not exist"
+            ),
+        }
     }
 
     // A rerun renders nothing: every cached file stays as it was written.
@@ -304,7 +310,11 @@ fn a_plan_lists_each_image_once_and_exactly_those_a_run_then_renders_once_each()
         "each image rendered once"
     );
     let comparison = std::fs::read_to_string(out.join("plan_vs_actual.csv")).unwrap();
-    assert_eq!(comparison.lines().count(), 1 + 9, "{comparison}");
+    assert_eq!(
+        comparison.lines().count(),
+        1 + hmdist::experiments::EXPERIMENTS.len(),
+        "{comparison}"
+    );
     let from_earlier_runs = |csv: &str| -> BTreeMap<String, f64> {
         csv.lines()
             .skip(1)
@@ -542,4 +552,91 @@ fn cube_maps_made_in_parts_by_the_multi_output_pass_are_not_rendered_again() {
         let json = std::fs::read_to_string(out.join("cache").join(format!("{stem}.json"))).unwrap();
         assert!(json.contains("\"shards\""), "{stem} is the merged pass's image");
     }
+}
+
+#[test]
+fn tables_1_and_2_without_cube_maps_render_the_same_gather_images_and_no_cube_map() {
+    // The paper's scene-B row of Table 1 has no cube-map column: `--no-cubemap` asks for
+    // gather's images only, under the keys a run with cube maps gives them.
+    let dir = Scratch::new("experiments-no-cubemap");
+    let out = dir.join("out");
+    let gather_only = |out: &Path| {
+        Runner::new("slab", Preset::Quick, out, &Silent)
+            .unwrap()
+            .with_size(Some(8))
+            .unwrap()
+            .with_cubemaps(false)
+    };
+    gather_only(&out).run("table1,table2").unwrap();
+    let stems = cached_stems(&out);
+    assert!(!stems.is_empty());
+    assert!(stems.iter().all(|s| s.starts_with("gather-")), "{stems:?}");
+    for table in ["table1.csv", "table2.csv"] {
+        let csv = std::fs::read_to_string(out.join(table)).unwrap();
+        let header = csv.lines().next().unwrap();
+        assert!(!header.contains("cubemap"), "{table}: {header}");
+        assert!(column(&csv, 1).iter().all(|v| v.is_finite()), "{table}:\n{csv}");
+    }
+
+    let before = backdate_cache(&out);
+    let renders = Renders::default();
+    let mut both = Runner::new("slab", Preset::Quick, &out, &renders)
+        .unwrap()
+        .with_size(Some(8))
+        .unwrap();
+    both.run("table1,table2").unwrap();
+    let after = cache_times(&out);
+    for (name, time) in &before {
+        assert_eq!(
+            after.get(name),
+            Some(time),
+            "{name} was found cached, not rendered again"
+        );
+    }
+    let new: Vec<&String> = after.keys().filter(|n| !before.contains_key(*n)).collect();
+    assert!(
+        new.iter().all(|n| n.starts_with("cubemap-")),
+        "only cube maps are new: {new:?}"
+    );
+    let csv = std::fs::read_to_string(out.join("table1.csv")).unwrap();
+    assert!(csv.lines().next().unwrap().contains("cubemap"), "{csv}");
+    // The page opens with the findings the run tested, each linked to its section.
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    let summary = html.find("<h2 id=\"findings\">").expect("a findings section");
+    assert!(
+        summary < html.find("<h2 id=\"table1\">").unwrap(),
+        "findings come first"
+    );
+    assert!(
+        html.contains("<li><a href=\"#table1\">table1</a>: Final gathering"),
+        "{html}"
+    );
+    assert!(
+        html.contains("<li><a href=\"#table2\">table2</a>: The cube map's cost"),
+        "{html}"
+    );
+}
+
+#[test]
+fn fig11_compares_the_cube_map_at_the_reference_rays_with_the_reference_and_shares_fig9s_image() {
+    let dir = Scratch::new("experiments-fig11");
+    let out = dir.join("out");
+    let mut first = Runner::new("slab", Preset::Quick, &out, &Silent)
+        .unwrap()
+        .with_size(Some(8))
+        .unwrap();
+    first.run("fig11").unwrap();
+    let csv = std::fs::read_to_string(out.join("fig11.csv")).unwrap();
+    let f_diff = column(&csv, 2);
+    assert_eq!(f_diff.len(), 1, "{csv}");
+    assert!(f_diff[0].is_finite() && f_diff[0] >= 0.0, "{csv}");
+    assert!(out.join("fig11.png").exists());
+    // Fig. 9 needs the same R = 64 image and renders only R = 128.
+    let renders = Renders::default();
+    let mut second = Runner::new("slab", Preset::Quick, &out, &renders)
+        .unwrap()
+        .with_size(Some(8))
+        .unwrap();
+    second.run("fig9").unwrap();
+    assert_eq!(renders.0.load(std::sync::atomic::Ordering::Relaxed), 1);
 }

@@ -29,7 +29,7 @@ python3 - "$out/index.html" "$dest/index.html" "$run" <<'PY'
 import os, re, sys
 
 source, target, run = sys.argv[1], sys.argv[2], sys.argv[3]
-ORDER = ["table1", "table2", "fig9", "table3", "fig10", "table4", "fig16_17", "adaptive", "memory"]
+ORDER = ["table1", "table2", "fig9", "fig11", "table3", "fig10", "table4", "fig16_17", "adaptive", "memory"]
 
 def parse(html):
     """(head up to <body>, intro: h1 and its paragraph, preamble before the first section,
@@ -63,9 +63,18 @@ if os.path.exists(target):
         sys.exit(f"{target} is another scene's, preset's or size's report: not merged")
     sections = {**old_sections, **sections}
 rank = lambda s: (ORDER.index(s) if s in ORDER else len(ORDER), s)
+sections.pop("findings", None)
 order = sorted(sections, key=rank)
-write(head + intro + "".join(sections[s] for s in order) + tail)
-print(f"{os.path.basename(target)}: sections {', '.join(order)}")
+# The page's first section: every section's findings (its <li class="finding"> items), each
+# linked to its section, made again from the merged sections.
+items = [
+    f'<li><a href="#{name}">{name}</a>: {item}</li>'
+    for name in order
+    for item in re.findall(r'<li class="finding">(.*?)</li>', sections[name])
+]
+findings = f'<h2 id="findings">The paper\'s findings</h2>\n<ul>\n' + "\n".join(items) + "\n</ul>\n" if items else ""
+write(head + intro + findings + "".join(sections[s] for s in order) + tail)
+print(f"{os.path.basename(target)}: sections {', '.join(order)}; {len(items)} findings")
 PY
 for f in "$out"/*.png; do
     python3 - "$f" "$dest/$(basename "$f")" <<'PY'

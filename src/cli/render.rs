@@ -157,8 +157,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
     for (aov, path) in &pictures {
         let channel = rendered.aovs.iter().find(|c| c.aov == *aov).expect("asked for");
         let (w, h) = (rendered.image.width, rendered.image.height);
+        // An adaptive render's rays per pixel span decades: a log scale shows them.
+        let scale = match aov {
+            Aov::Rays => picture::ColourScale::Log,
+            _ => picture::ColourScale::Linear,
+        };
         contents.push(picture::encode_png(
-            &picture::false_colour(&channel.data, w, h, aov.name()),
+            &picture::false_colour_scaled(&channel.data, w, h, aov.name(), scale),
             path,
         )?);
     }

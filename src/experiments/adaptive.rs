@@ -9,7 +9,7 @@ use super::rays::reference;
 use super::{Runner, Section, Table};
 use crate::error::Result;
 use crate::estimators::{AdaptiveParams, Aov, GatherParams};
-use crate::image::picture::{encode_png, false_colour};
+use crate::image::picture::{encode_png, false_colour_scaled, ColourScale};
 use crate::image::{write_atomically, HmdImage};
 use crate::metrics::f_diff;
 use crate::sampling::Sampler;
@@ -278,6 +278,7 @@ pub fn adaptive(runner: &Runner) -> Result<Section> {
         tables: vec![table],
         files,
         notes,
+        ..Section::default()
     })
 }
 
@@ -301,7 +302,7 @@ fn rays_picture(runner: &Runner) -> Result<std::path::PathBuf> {
     let (_, _, aovs) = runner.method_image_with("adaptive", &config, 1, &[Aov::Rays])?;
     let size = runner.params.size;
     let label = format!("rays, tolerance {tolerance}");
-    let picture = false_colour(&aovs[0].data, size, size, &label);
+    let picture = false_colour_scaled(&aovs[0].data, size, size, &label, ColourScale::Log);
     let path = runner.out.join("adaptive_rays.png");
     write_atomically(&path, &encode_png(&picture, &path)?)?;
     Ok(path)

@@ -15,11 +15,22 @@ pub struct Tile {
     pub picture: GrayImage,
 }
 
-const GLYPH_SCALE: u32 = 1;
 /// Pictures narrower than this are enlarged (nearest texel, integer factor) to fit a caption.
 const MIN_TILE_WIDTH: u32 = 144;
-const CAPTION_HEIGHT: u32 = 8 * GLYPH_SCALE + 8;
+/// A caption's glyphs are 8 × this many pixels per this many pixels of tile width: 8 px on a
+/// 144-px tile, 48 px on a 1024-px one (12 px when the grid is shown at a quarter).
+const TILE_WIDTH_PER_GLYPH_SCALE: u32 = 160;
 const GAP: u32 = 6;
+
+/// The glyph scale of captions over tiles `cell_w` pixels wide.
+fn glyph_scale(cell_w: u32) -> u32 {
+    (cell_w / TILE_WIDTH_PER_GLYPH_SCALE).max(1)
+}
+
+/// The height of the caption strip above a tile, for glyphs of `scale`.
+fn caption_height(scale: u32) -> u32 {
+    8 * scale + 8
+}
 
 /// Tiles in rows of `columns`, on white; a `None` leaves its cell empty.
 pub fn grid(tiles: &[Option<Tile>], columns: usize) -> GrayImage {
@@ -45,13 +56,15 @@ pub fn grid(tiles: &[Option<Tile>], columns: usize) -> GrayImage {
         .map(|t| t.picture.width())
         .max()
         .unwrap_or(1);
+    let scale = glyph_scale(cell_w);
+    let caption_h = caption_height(scale);
     let cell_h = tiles
         .iter()
         .flatten()
         .map(|t| t.picture.height())
         .max()
         .unwrap_or(1)
-        + CAPTION_HEIGHT;
+        + caption_h;
     let width = GAP + columns as u32 * (cell_w + GAP);
     let height = GAP + rows as u32 * (cell_h + GAP);
     let mut out = GrayImage::from_pixel(width, height, Luma([255]));
@@ -59,17 +72,17 @@ pub fn grid(tiles: &[Option<Tile>], columns: usize) -> GrayImage {
         let Some(tile) = tile else { continue };
         let x0 = GAP + (i % columns) as u32 * (cell_w + GAP);
         let y0 = GAP + (i / columns) as u32 * (cell_h + GAP);
-        draw_text(&mut out, x0, y0 + 4, &tile.caption, cell_w);
-        image::imageops::replace(&mut out, &tile.picture, x0 as i64, (y0 + CAPTION_HEIGHT) as i64);
+        draw_text(&mut out, x0, y0 + 4, &tile.caption, cell_w, scale);
+        image::imageops::replace(&mut out, &tile.picture, x0 as i64, (y0 + caption_h) as i64);
     }
     out
 }
 
-/// Draws `text` at (x, y) in black, cut at `max_width` pixels.
-fn draw_text(image: &mut GrayImage, x: u32, y: u32, text: &str, max_width: u32) {
-    let fits = (max_width / (8 * GLYPH_SCALE)) as usize;
+/// Draws `text` at (x, y) in black, glyphs of `scale`, cut at `max_width` pixels.
+fn draw_text(image: &mut GrayImage, x: u32, y: u32, text: &str, max_width: u32, scale: u32) {
+    let fits = (max_width / (8 * scale)) as usize;
     let text: String = text.chars().take(fits).collect();
-    crate::image::picture::draw_text(image, x, y, &text, GLYPH_SCALE, Luma([0]));
+    crate::image::picture::draw_text(image, x, y, &text, scale, Luma([0]));
 }
 
 pub fn write_grid(path: &Path, tiles: &[Option<Tile>], columns: usize) -> Result<()> {
@@ -79,6 +92,23 @@ pub fn write_grid(path: &Path, tiles: &[Option<Tile>], columns: usize) -> Result
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    const CAPTION_HEIGHT: u32 = 16;
+
+    #[test]
+    fn captions_grow_with_the_tiles_so_that_a_quarter_size_grid_stays_readable() {
+        let tile = Some(Tile {
+            caption: "N=16384".into(),
+            picture: GrayImage::from_pixel(1024, 4, Luma([200])),
+        });
+        let g = grid(&[tile], 1);
+        let inked_rows = (0..g.height() - 4)
+            .filter(|&y| (0..g.width()).any(|x| g.get_pixel(x, y).0[0] == 0))
+            .count();
+        // 48-px glyphs (12 px at a quarter); "N=16384" has ink in 7 of each glyph's 8 rows.
+        assert!(inked_rows >= 40, "caption ink rows: {inked_rows}");
+        assert_eq!(g.height(), GAP + 4 + caption_height(6) + GAP);
+    }
 
     #[test]
     fn tiles_land_in_their_cells_below_their_captions() {

@@ -75,6 +75,12 @@ pub const EXPERIMENTS: &[Experiment] = &[
         run: rays::fig9,
     },
     Experiment {
+        name: "fig11",
+        summary: "the cube map at the reference's ray count beside the reference (scene B's figure)",
+        images: |_| 2,
+        run: rays::fig11,
+    },
+    Experiment {
         name: "table3",
         summary: "photon gather seconds and f_diff by photons and K, methods I and II (with fig14, fig15)",
         images: |p| 1 + 2 * (p.photons.len() * p.gathers.len()) as u64,
@@ -224,8 +230,12 @@ pub struct Section {
     pub tables: Vec<Table>,
     /// The files it wrote (tables, plots, picture grids).
     pub files: Vec<PathBuf>,
-    /// Sentences on the paper's findings: reproduced or not, in numbers.
+    /// What the reader needs besides the tables: where the numbers come from, what the
+    /// pictures show.
     pub notes: Vec<String>,
+    /// The paper's findings this experiment tests, one sentence each: the finding, the
+    /// verdict, and the number that decides it. The report lists every section's at its top.
+    pub findings: Vec<String>,
 }
 
 /// Runs experiments on one scene into one folder.
@@ -273,6 +283,8 @@ pub struct Runner<'a> {
     part_rays: u64,
     /// The experiments this run runs.
     running: Vec<&'static str>,
+    /// Whether the ray studies (Tables 1–2) render the cube map beside final gathering.
+    cubemaps: bool,
 }
 
 /// A plan in the making ([`plan`]): every image the experiments ask for is looked up in the
@@ -330,6 +342,7 @@ impl<'a> Runner<'a> {
             earlier_parts: RefCell::default(),
             part_rays: PART_RAYS,
             running: vec![],
+            cubemaps: true,
         })
     }
 
@@ -390,6 +403,19 @@ impl<'a> Runner<'a> {
     /// part of the image cache's key: shards and the run that assembles them must agree.
     pub fn with_backend(self, backend: Backend) -> Self {
         Runner { backend, ..self }
+    }
+
+    /// This runner with Tables 1–2 rendering the cube map beside final gathering (`true`,
+    /// the default) or final gathering alone (`false`: the paper's scene-B row of Table 1 has
+    /// no cube-map column). Changes no image's cache key: it only decides which images are
+    /// asked for.
+    pub fn with_cubemaps(self, cubemaps: bool) -> Self {
+        Runner { cubemaps, ..self }
+    }
+
+    /// Whether Tables 1–2 render the cube map beside final gathering.
+    pub fn cubemaps(&self) -> bool {
+        self.cubemaps
     }
 
     /// This runner with the GPU's cube maps filled by `fill` (default: raster, the paper's

@@ -6,6 +6,26 @@
 /// which count each value belongs to is uncertain).
 pub const TABLE1_HEADED_RAYS: [u32; 9] = [32, 64, 128, 256, 512, 1024, 2048, 4096, 8192];
 
+/// The paper's two scenes, whose findings differ (Fig. 16/17: light-sourced photons do better
+/// in A, camera-sourced in B).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PaperScene {
+    /// A closed cube holding five detailed objects, lit from inside.
+    A,
+    /// A larger interior lit from outside, seen in part.
+    B,
+}
+
+/// The paper's scene that the built-in scene `name` stands for (SPEC §5: `cube` for A, `hall`
+/// for B); `None` for any other scene.
+pub fn analogue(name: &str) -> Option<PaperScene> {
+    match name {
+        "cube" => Some(PaperScene::A),
+        "hall" => Some(PaperScene::B),
+        _ => None,
+    }
+}
+
 /// Table 1, `f_diff` of CPU final gathering against the 65,536-ray reference, scene A, in
 /// the text's order.
 pub const TABLE1_CPU_A: [f64; 8] = [0.5971, 0.3121, 0.1967, 0.1113, 0.0357, 0.0248, 0.0351, 0.0109];
@@ -41,16 +61,37 @@ pub struct CubeDifference {
     pub f_diff: f64,
 }
 
-/// Table 2: seconds for a 1024 × 1024 image, CPU final gathering against the GPU cube map.
-pub const TABLE2: [Table2Row; 7] = [
+/// Table 2: seconds for a 1024 × 1024 image, CPU final gathering against the GPU cube map,
+/// every row of the paper.
+pub const TABLE2: [Table2Row; 13] = [
     Table2Row::new(16, 61.6, 2412.4),
+    Table2Row::new(32, 104.5, 2426.9),
     Table2Row::new(64, 251.6, 2427.8),
+    Table2Row::new(128, 486.0, 2433.7),
     Table2Row::new(256, 958.0, 2430.5),
+    Table2Row::new(512, 1966.0, 2442.0),
     Table2Row::new(1024, 3809.7, 2448.4),
+    Table2Row::new(2048, 7756.2, 2471.0),
     Table2Row::new(4096, 14825.3, 2473.6),
+    Table2Row::new(8192, 29689.7, 2495.1),
     Table2Row::new(16384, 56647.8, 2487.8),
+    Table2Row::new(32768, 111470.1, 2519.2),
     Table2Row::new(65536, 225910.1, 2596.0),
 ];
+
+/// The row of [`TABLE2`] for `rays`, if the paper has one.
+pub fn table2_row(rays: u32) -> Option<&'static Table2Row> {
+    TABLE2.iter().find(|r| r.rays == rays)
+}
+
+/// Table 1's values in the text's order, matched to the ray counts the halves are headed with
+/// as they read (the first four headings of each half): `(CPU A, CPU B, GPU A)` at `rays`,
+/// where the reading gives one. Which count each value belongs to is uncertain (SPEC §6).
+pub fn table1_as_read(rays: u32) -> Option<(f64, f64, f64)> {
+    const READ_RAYS: [u32; 8] = [32, 64, 128, 256, 1024, 2048, 4096, 8192];
+    let i = READ_RAYS.iter().position(|&r| r == rays)?;
+    Some((TABLE1_CPU_A[i], TABLE1_CPU_B[i], TABLE1_GPU_A[i]))
+}
 
 /// One row of [`TABLE2`].
 pub struct Table2Row {
@@ -72,16 +113,54 @@ impl Table2Row {
     }
 }
 
-/// Table 3's corners: seconds to gather (map build excluded), scene A, 1024 × 1024.
-pub const TABLE3: [Table3Corner; 4] = [
-    Table3Corner::new(130_000, 64, 17.5, 19.2),
-    Table3Corner::new(130_000, 1024, 195.8, 221.2),
-    Table3Corner::new(8_530_000, 64, 120.2, 122.8),
-    Table3Corner::new(8_530_000, 1024, 403.8, 436.1),
+/// Table 3: seconds to gather (map build excluded), scene A, 1024 × 1024, by photons stored
+/// and photons gathered K, every cell of the paper (method I at 1.06 M photons and K = 1,024
+/// reads 150.1 s in the paper, out of line with its neighbours: kept as printed).
+pub const TABLE3: [Table3Cell; 35] = [
+    Table3Cell::new(130_000, 64, 17.5, 19.2),
+    Table3Cell::new(130_000, 128, 43.2, 40.8),
+    Table3Cell::new(130_000, 256, 66.7, 71.9),
+    Table3Cell::new(130_000, 512, 119.7, 131.4),
+    Table3Cell::new(130_000, 1024, 195.8, 221.2),
+    Table3Cell::new(260_000, 64, 20.5, 22.2),
+    Table3Cell::new(260_000, 128, 51.8, 48.9),
+    Table3Cell::new(260_000, 256, 71.5, 76.0),
+    Table3Cell::new(260_000, 512, 126.7, 140.1),
+    Table3Cell::new(260_000, 1024, 214.0, 242.2),
+    Table3Cell::new(530_000, 64, 23.2, 25.7),
+    Table3Cell::new(530_000, 128, 51.1, 52.5),
+    Table3Cell::new(530_000, 256, 77.3, 83.5),
+    Table3Cell::new(530_000, 512, 137.5, 153.6),
+    Table3Cell::new(530_000, 1024, 228.7, 256.7),
+    Table3Cell::new(1_060_000, 64, 29.6, 32.0),
+    Table3Cell::new(1_060_000, 128, 59.6, 60.2),
+    Table3Cell::new(1_060_000, 256, 88.4, 94.2),
+    Table3Cell::new(1_060_000, 512, 154.3, 169.0),
+    Table3Cell::new(1_060_000, 1024, 150.1, 273.5),
+    Table3Cell::new(2_130_000, 64, 41.4, 43.2),
+    Table3Cell::new(2_130_000, 128, 72.7, 78.2),
+    Table3Cell::new(2_130_000, 256, 103.6, 109.3),
+    Table3Cell::new(2_130_000, 512, 177.9, 199.4),
+    Table3Cell::new(2_130_000, 1024, 278.5, 314.5),
+    Table3Cell::new(4_260_000, 64, 75.4, 72.8),
+    Table3Cell::new(4_260_000, 128, 98.0, 101.3),
+    Table3Cell::new(4_260_000, 256, 131.2, 144.3),
+    Table3Cell::new(4_260_000, 512, 221.7, 238.9),
+    Table3Cell::new(4_260_000, 1024, 335.8, 365.9),
+    Table3Cell::new(8_530_000, 64, 120.2, 122.8),
+    Table3Cell::new(8_530_000, 128, 158.6, 148.1),
+    Table3Cell::new(8_530_000, 256, 180.8, 190.7),
+    Table3Cell::new(8_530_000, 512, 277.8, 289.2),
+    Table3Cell::new(8_530_000, 1024, 403.8, 436.1),
 ];
 
-/// One corner of [`TABLE3`].
-pub struct Table3Corner {
+/// The cell of [`TABLE3`] at `photons` and `k`, if the paper has one.
+pub fn table3_cell(photons: usize, k: usize) -> Option<&'static Table3Cell> {
+    TABLE3.iter().find(|c| c.photons == photons && c.k == k)
+}
+
+/// One cell of [`TABLE3`].
+pub struct Table3Cell {
     /// Photons stored.
     pub photons: usize,
     /// Photons gathered per pixel K.
@@ -92,9 +171,9 @@ pub struct Table3Corner {
     pub method2_seconds: f64,
 }
 
-impl Table3Corner {
+impl Table3Cell {
     const fn new(photons: usize, k: usize, method1_seconds: f64, method2_seconds: f64) -> Self {
-        Table3Corner {
+        Table3Cell {
             photons,
             k,
             method1_seconds,
@@ -107,10 +186,15 @@ impl Table3Corner {
 /// the second, Fig. 16/17 both.
 pub const BOUNCES: [u32; 2] = [20, 80];
 
-/// Table 4: seconds to build the photon map (80 bounces, kd-tree included).
-pub const TABLE4: [Table4Row; 3] = [
+/// Table 4: seconds to build the photon map (80 bounces, kd-tree included), every row of
+/// the paper.
+pub const TABLE4: [Table4Row; 7] = [
     Table4Row::new("130 K", 1.6, 1.0),
+    Table4Row::new("260 K", 2.7, 1.9),
+    Table4Row::new("530 K", 4.9, 3.8),
     Table4Row::new("1.06 M", 9.4, 6.4),
+    Table4Row::new("2.13 M", 18.9, 12.1),
+    Table4Row::new("4.26 M", 38.9, 26.2),
     Table4Row::new("8.53 M", 83.8, 54.4),
 ];
 

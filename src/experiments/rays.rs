@@ -16,9 +16,16 @@ use crate::metrics::{difference_picture, f_diff};
 struct SweepRow {
     rays: u32,
     gather_f_diff: f64,
-    cubemap_f_diff: f64,
+    /// The cube map's, where the run renders cube maps ([`Runner::with_cubemaps`]).
+    cubemap: Option<CubemapCell>,
     gather_seconds: f64,
-    cubemap_seconds: f64,
+}
+
+/// One ray count's cube map: f_diff and seconds.
+#[derive(Clone, Copy)]
+struct CubemapCell {
+    f_diff: f64,
+    seconds: f64,
 }
 
 /// The rows, the reference and gather's image per ray count.
@@ -27,17 +34,36 @@ struct RaySweep {
     excluded: usize,
     reference: HmdImage,
     gathered: Vec<HmdImage>,
-    /// Where the cube maps were built, as their reports say (`cpu`, `gpu`).
-    cubemap_backend: String,
+    /// Where the cube maps were built, as their reports say (`cpu`, `gpu`); `None` where
+    /// the run renders no cube map.
+    cubemap_backend: Option<String>,
 }
 
 impl RaySweep {
     /// One column of the rows against the ray count, for a plot.
-    fn series(&self, label: &str, pick: fn(&SweepRow) -> f64) -> Series {
+    fn series(&self, label: &str, pick: fn(&SweepRow) -> Option<f64>) -> Series {
         Series {
             label: label.into(),
-            points: self.rows.iter().map(|r| (r.rays as f64, pick(r))).collect(),
+            points: self
+                .rows
+                .iter()
+                .filter_map(|r| pick(r).map(|v| (r.rays as f64, v)))
+                .collect(),
         }
+    }
+
+    /// The plot's series: gather's column and, where the run made cube maps, theirs.
+    fn plot_series(
+        &self,
+        cubemap: &Option<String>,
+        gather: fn(&SweepRow) -> Option<f64>,
+        cube: fn(&SweepRow) -> Option<f64>,
+    ) -> Vec<Series> {
+        let mut series = vec![self.series("gather", gather)];
+        if let Some(label) = cubemap {
+            series.push(self.series(label, cube));
+        }
+        series
     }
 }
 
@@ -86,25 +112,36 @@ fn cubemap_group(runner: &Runner) -> Vec<CubemapParams> {
     group
 }
 
-/// Renders the reference and, for each ray count, gather and the cube map.
+/// Renders the reference and, for each ray count, gather and (unless the run renders no
+/// cube maps) the cube map.
 fn ray_sweep(runner: &Runner) -> Result<RaySweep> {
     let reference = reference(runner)?;
-    runner.cubemap_sweep(&cubemap_group(runner), 1)?;
+    if runner.cubemaps() {
+        runner.cubemap_sweep(&cubemap_group(runner), 1)?;
+    }
     let l_diag = runner.scene.diagonal();
     let (mut rows, mut gathered, mut excluded) = (vec![], vec![], 0);
-    let mut cubemap_backend = String::new();
+    let mut cubemap_backend = None;
     for &rays in &runner.params.rays {
         let (g, g_report) = runner.method_image("gather", &gather_params(rays), 1)?;
-        let (c, c_report) = runner.method_image("cubemap", &cubemap_params(runner, rays), 1)?;
-        cubemap_backend = backend_of(&c_report);
-        let (fg, fc) = (f_diff(&reference, &g, l_diag)?, f_diff(&reference, &c, l_diag)?);
-        excluded = excluded.max(fg.excluded).max(fc.excluded);
+        let fg = f_diff(&reference, &g, l_diag)?;
+        excluded = excluded.max(fg.excluded);
+        let mut cubemap = None;
+        if runner.cubemaps() {
+            let (c, c_report) = runner.method_image("cubemap", &cubemap_params(runner, rays), 1)?;
+            cubemap_backend = Some(backend_of(&c_report));
+            let fc = f_diff(&reference, &c, l_diag)?;
+            excluded = excluded.max(fc.excluded);
+            cubemap = Some(CubemapCell {
+                f_diff: fc.value,
+                seconds: c_report.seconds.estimate,
+            });
+        }
         rows.push(SweepRow {
             rays,
             gather_f_diff: fg.value,
-            cubemap_f_diff: fc.value,
+            cubemap,
             gather_seconds: g_report.seconds.estimate,
-            cubemap_seconds: c_report.seconds.estimate,
         });
         gathered.push(g);
     }
@@ -131,12 +168,16 @@ fn backend_of(report: &crate::report::RenderReport) -> String {
     }
 }
 
-/// The label of the cube map's column: its resolution and backend, as rendered.
-fn cubemap_label(runner: &Runner, sweep: &RaySweep) -> String {
-    format!(
-        "cubemap R = {} ({})",
-        runner.params.cube_res, sweep.cubemap_backend
-    )
+/// The label of the cube map's column: its resolution and backend, as rendered; `None`
+/// where the run rendered no cube map.
+fn cubemap_label(runner: &Runner, sweep: &RaySweep) -> Option<String> {
+    let backend = sweep.cubemap_backend.as_ref()?;
+    Some(format!("cubemap R = {} ({backend})", runner.params.cube_res))
+}
+
+/// A table cell: `value` with `digits` decimals, or empty where there is none.
+fn cell(value: Option<f64>, digits: usize) -> String {
+    value.map_or(String::new(), |v| format!("{v:.digits$}"))
 }
 
 /// Table 1: f_diff against the reference by number of gather rays, gather and cube map.
@@ -152,23 +193,34 @@ pub fn table1(runner: &Runner) -> Result<Section> {
             p.size,
             runner.scene.name
         ),
-        &[
-            "rays",
-            "gather f_diff",
-            &format!("{cubemap} f_diff"),
-            "gather step ratio",
-        ],
+        &strs(&columns(
+            &["rays", "gather f_diff"],
+            cubemap.as_ref().map(|c| format!("{c} f_diff")),
+            &[
+                "gather step ratio",
+                "paper CPU, A",
+                "paper CPU, B",
+                "paper GPU, A",
+            ],
+        )),
     );
     let mut previous: Option<f64> = None;
     for row in &sweep.rows {
         let fg = row.gather_f_diff;
         let ratio = previous.map_or("".to_string(), |q| format!("{:.2}", fg / q));
-        ours.push(vec![
-            row.rays.to_string(),
-            format!("{fg:.4}"),
-            format!("{:.4}", row.cubemap_f_diff),
-            ratio,
-        ]);
+        let cube = cubemap.as_ref().map(|_| cell(row.cubemap.map(|c| c.f_diff), 4));
+        let published = paper::table1_as_read(row.rays);
+        let paper_cell = |pick: fn((f64, f64, f64)) -> f64| cell(published.map(pick), 4);
+        ours.push(columns(
+            &[&row.rays.to_string(), &format!("{fg:.4}")],
+            cube,
+            &[
+                &ratio,
+                &paper_cell(|p| p.0),
+                &paper_cell(|p| p.1),
+                &paper_cell(|p| p.2),
+            ],
+        ));
         previous = Some(fg);
     }
     let mut published = Table::new(
@@ -191,22 +243,27 @@ pub fn table1(runner: &Runner) -> Result<Section> {
         "f_diff against the reference",
         "gather rays N",
         "f_diff (% of l_diag)",
-        &[
-            sweep.series("gather", |r| r.gather_f_diff),
-            sweep.series(&cubemap, |r| r.cubemap_f_diff),
-        ],
+        &sweep.plot_series(
+            &cubemap,
+            |r| Some(r.gather_f_diff),
+            |r| r.cubemap.map(|c| c.f_diff),
+        ),
     )?;
     files.push(plot);
     files.extend(ray_grids(runner, &sweep)?);
     Ok(Section {
         name: "table1".into(),
-        notes: table1_notes(&sweep),
+        findings: table1_findings(&sweep),
+        notes: vec![format!(
+            "Pixels excluded from f_diff (not finite in one of the images): {}. The paper's columns are read in the text's order against the headings of its two halves (32 … 256, then 1,024 … 8,192); one column of each half was lost, so which N each value belongs to is uncertain (SPEC §6).",
+            sweep.excluded
+        )],
         tables: vec![ours, published],
         files,
     })
 }
 
-fn table1_notes(sweep: &RaySweep) -> Vec<String> {
+fn table1_findings(sweep: &RaySweep) -> Vec<String> {
     let ratios: Vec<String> = sweep
         .rows
         .windows(2)
@@ -223,19 +280,13 @@ fn table1_notes(sweep: &RaySweep) -> Vec<String> {
     let falls = below_level_off
         .windows(2)
         .all(|w| w[1].gather_f_diff < w[0].gather_f_diff);
-    vec![
-        format!(
-            "Error halves per doubling up to about {} rays (paper): gather's f_diff changes per doubling {}; {} up to {} rays.",
-            paper::LEVEL_OFF_RAYS,
-            ratios.join(", "),
-            if falls { "it falls at every step" } else { "it does NOT fall at every step" },
-            paper::LEVEL_OFF_RAYS / 2,
-        ),
-        format!(
-            "Pixels excluded from f_diff (not finite in one of the images): {}.",
-            sweep.excluded
-        ),
-    ]
+    vec![format!(
+        "Final gathering's error falls with each doubling of rays, then oscillates down slowly from about {} rays (paper): {} up to {} rays; per doubling {}.",
+        paper::LEVEL_OFF_RAYS,
+        if falls { "it falls at every step" } else { "it does NOT fall at every step" },
+        paper::LEVEL_OFF_RAYS / 2,
+        ratios.join(", "),
+    )]
 }
 
 /// Table 2: seconds per image against gather rays, gather and cube map.
@@ -250,14 +301,23 @@ pub fn table2(runner: &Runner) -> Result<Section> {
             p.size,
             runner.scene.name
         ),
-        &["rays", "gather s", &format!("{cubemap} s")],
+        &strs(&columns(
+            &["rays", "gather s"],
+            cubemap.as_ref().map(|c| format!("{c} s")),
+            &["paper CPU s", "paper GPU s"],
+        )),
     );
     for row in &sweep.rows {
-        ours.push(vec![
-            row.rays.to_string(),
-            format!("{:.3}", row.gather_seconds),
-            format!("{:.3}", row.cubemap_seconds),
-        ]);
+        let cube = cubemap.as_ref().map(|_| cell(row.cubemap.map(|c| c.seconds), 3));
+        let published = paper::table2_row(row.rays);
+        ours.push(columns(
+            &[&row.rays.to_string(), &format!("{:.3}", row.gather_seconds)],
+            cube,
+            &[
+                &cell(published.map(|p| p.cpu_seconds), 1),
+                &cell(published.map(|p| p.gpu_seconds), 1),
+            ],
+        ));
     }
     let mut published = Table::new(
         "Table 2 (paper, 1024², Xeon E5420 vs GeForce 8800 GTX)",
@@ -272,17 +332,18 @@ pub fn table2(runner: &Runner) -> Result<Section> {
     }
     let (first, last) = (sweep.rows.first(), sweep.rows.last());
     let (paper_first, paper_last) = (&paper::TABLE2[0], &paper::TABLE2[paper::TABLE2.len() - 1]);
-    let notes = match (first, last) {
-        (Some(a), Some(b)) => vec![format!(
-            "Cube-map cost hardly depends on N (paper, GPU: ×{:.2} from {} to {} rays): here, from {} to {} rays, gather's seconds grow ×{:.1} and the cube map's ({}) ×{:.1} — the CPU backend fills only the texels it looks up, so it scales like gathering; the GPU backend renders whole hemicubes (see `cargo bench --bench cubemap`).",
+    let cube_ends = first.and_then(|a| a.cubemap).zip(last.and_then(|b| b.cubemap));
+    let findings = match (first, last, cube_ends) {
+        (Some(a), Some(b), Some((ca, cb))) => vec![format!(
+            "The cube map's cost hardly depends on N (paper, GPU: ×{:.2} from {} to {} rays): here, from {} to {} rays, gather's seconds grow ×{:.1} and the cube map's ({}) ×{:.1} — the CPU backend fills only the texels it looks up, so it scales like gathering; the GPU backend renders whole hemicubes (see `cargo bench --bench cubemap`).",
             paper_last.gpu_seconds / paper_first.gpu_seconds,
             paper_first.rays,
             paper_last.rays,
             a.rays,
             b.rays,
             b.gather_seconds / a.gather_seconds,
-            sweep.cubemap_backend,
-            b.cubemap_seconds / a.cubemap_seconds
+            sweep.cubemap_backend.as_deref().unwrap_or("?"),
+            cb.seconds / ca.seconds
         )],
         _ => vec![],
     };
@@ -294,18 +355,32 @@ pub fn table2(runner: &Runner) -> Result<Section> {
         "seconds per image",
         "gather rays N",
         "seconds",
-        &[
-            sweep.series("gather", |r| r.gather_seconds),
-            sweep.series(&cubemap, |r| r.cubemap_seconds),
-        ],
+        &sweep.plot_series(
+            &cubemap,
+            |r| Some(r.gather_seconds),
+            |r| r.cubemap.map(|c| c.seconds),
+        ),
     )?;
     files.push(plot);
     Ok(Section {
         name: "table2".into(),
         tables: vec![ours, published],
         files,
-        notes,
+        findings,
+        ..Section::default()
     })
+}
+
+/// A table row or header: `head`, then `middle` where there is one, then `tail`.
+fn columns<S: AsRef<str>>(head: &[S], middle: Option<String>, tail: &[S]) -> Vec<String> {
+    let head = head.iter().map(|s| s.as_ref().to_string());
+    let tail = tail.iter().map(|s| s.as_ref().to_string());
+    head.chain(middle).chain(tail).collect()
+}
+
+/// `cells` borrowed, for [`Table::new`].
+fn strs(cells: &[String]) -> Vec<&str> {
+    cells.iter().map(String::as_str).collect()
 }
 
 /// Fig. 12 and 13: gather's HMD picture and its difference picture against the reference,
@@ -372,7 +447,7 @@ pub fn fig9(runner: &Runner) -> Result<Section> {
             d.compared.to_string(),
         ]);
         notes.push(format!(
-            "R = {r}: paper {} (CPU vs GPU at 65,536 rays), here {:.4} (cube map on {})",
+            "R = {r}: paper {}, here {:.4} (cube map on {})",
             published.f_diff,
             d.value,
             backend_of(&c_report)
@@ -395,6 +470,70 @@ pub fn fig9(runner: &Runner) -> Result<Section> {
         name: "fig9".into(),
         tables: vec![table],
         files,
-        notes: vec![format!("Cube map against gather: {}.", notes.join("; "))],
+        findings: vec![format!(
+            "The cube map agrees with final gathering to about 0.029 at R = 64 and 128 alike (paper, its CPU gather against its GPU cube map): {}.",
+            notes.join("; ")
+        )],
+        ..Section::default()
+    })
+}
+
+/// Fig. 11: the cube map at the preset's resolution and the reference's ray count (the
+/// paper's shows scene B's GPU cube map at 65,536 rays), beside the reference and their
+/// difference picture.
+pub fn fig11(runner: &Runner) -> Result<Section> {
+    let p = &runner.params;
+    let g = reference(runner)?;
+    let (c, c_report) = runner.method_image("cubemap", &cubemap_params(runner, p.reference_rays), 1)?;
+    let d = f_diff(&g, &c, runner.scene.diagonal())?;
+    let s = runner.scene.display_scale;
+    let mut table = Table::new(
+        &format!(
+            "Fig. 11 ({}): cube map R = {} against gather, {} rays, {}², `{}`",
+            runner.preset.name(),
+            p.cube_res,
+            p.reference_rays,
+            p.size,
+            runner.scene.name
+        ),
+        &["R", "backend", "f_diff", "pixels compared", "cube map s"],
+    );
+    table.push(vec![
+        p.cube_res.to_string(),
+        backend_of(&c_report),
+        format!("{:.4}", d.value),
+        d.compared.to_string(),
+        format!("{:.1}", c_report.seconds.estimate),
+    ]);
+    let tiles = vec![
+        Some(Tile {
+            caption: format!("gather {} (ref)", p.reference_rays),
+            picture: grey(&g, s),
+        }),
+        Some(Tile {
+            caption: format!("cube R={}", p.cube_res),
+            picture: grey(&c, s),
+        }),
+        Some(Tile {
+            caption: "diff x10".into(),
+            picture: difference_picture(&g, &c, s),
+        }),
+    ];
+    let path = runner.out.join("fig11.png");
+    write_grid(&path, &tiles, 3)?;
+    let mut files = table.write(&runner.out, "fig11")?;
+    files.push(path);
+    Ok(Section {
+        name: "fig11".into(),
+        tables: vec![table],
+        files,
+        notes: vec![format!(
+            "The paper's Fig. 11 is an image (scene B, GPU cube map, 65,536 rays) with no number; here the cube map (R = {}, {}) differs from the {}-ray gather reference by f_diff {:.4}.",
+            p.cube_res,
+            backend_of(&c_report),
+            p.reference_rays,
+            d.value
+        )],
+        ..Section::default()
     })
 }

@@ -27,6 +27,32 @@ fn html_table(t: &Table) -> String {
     out + "</table>\n"
 }
 
+/// The paper's findings the run tested, each with its verdict and number and a link to its
+/// section: the page's first section (`publish.sh` makes it again from every section when it
+/// merges runs into one page).
+fn findings_summary(runner: &Runner) -> String {
+    let items: Vec<String> = runner
+        .sections
+        .iter()
+        .flat_map(|section| {
+            section.findings.iter().map(move |f| {
+                format!(
+                    "<li><a href=\"#{0}\">{0}</a>: {1}</li>",
+                    escape(&section.name),
+                    escape(f)
+                )
+            })
+        })
+        .collect();
+    if items.is_empty() {
+        return String::new();
+    }
+    format!(
+        "<h2 id=\"findings\">The paper's findings</h2>\n<ul>\n{}\n</ul>\n",
+        items.join("\n")
+    )
+}
+
 pub fn write(runner: &Runner) -> Result<()> {
     let mut body = format!(
         "<h1>hmdist experiments: <code>{}</code>, preset {}</h1>\n<p>{}² pixels, reference: gather with {} rays. \
@@ -44,8 +70,18 @@ pub fn write(runner: &Runner) -> Result<()> {
                  an image the plan found cached costs nothing, and one an earlier run rendered after the plan (a run stopped, \
                  then resumed) counts with the seconds its report gives.</p>\n";
     }
+    // After the plan's paragraph: `publish.sh` takes what precedes the first section as the
+    // run's plan against run.
+    body += &findings_summary(runner);
     for section in &runner.sections {
         let _ = writeln!(body, "<h2 id=\"{0}\">{0}</h2>", escape(&section.name));
+        if !section.findings.is_empty() {
+            body += "<ul class=\"findings\">\n";
+            for finding in &section.findings {
+                let _ = writeln!(body, "<li class=\"finding\">{}</li>", escape(finding));
+            }
+            body += "</ul>\n";
+        }
         for table in &section.tables {
             body += &html_table(table);
         }
@@ -64,7 +100,7 @@ pub fn write(runner: &Runner) -> Result<()> {
             if let Ok(name) = picture.strip_prefix(&runner.out) {
                 let _ = writeln!(
                     body,
-                    "<p><img src=\"{0}\" alt=\"{0}\"></p>",
+                    "<p><a href=\"{0}\"><img src=\"{0}\" alt=\"{0}\"></a></p>",
                     escape(&name.to_string_lossy())
                 );
             }
@@ -82,8 +118,10 @@ pub fn write(runner: &Runner) -> Result<()> {
     }
     let page = format!(
         "<!doctype html>\n<html><head><meta charset=\"utf-8\"><title>hmdist experiments</title>\n\
-         <style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}}table{{border-collapse:collapse}}\
-         td,th{{border:1px solid #ccc;padding:2px 8px;text-align:right}}</style></head><body>\n{body}</body></html>\n"
+         <style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}}\
+         table{{border-collapse:collapse;display:block;max-width:100%;overflow-x:auto}}\
+         td,th{{border:1px solid #ccc;padding:2px 8px;text-align:right}}img{{max-width:100%;height:auto}}\
+         li.finding{{font-weight:bold}}</style></head><body>\n{body}</body></html>\n"
     );
     write_atomically(&runner.out.join("index.html"), page.as_bytes())
 }

@@ -51,16 +51,49 @@ const LEGEND_HEIGHT: u32 = 30;
 /// Narrowest false-colour picture: room for the legend's labels.
 const LEGEND_MIN_WIDTH: u32 = 200;
 
+/// How a false-colour picture maps values to colours.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ColourScale {
+    /// Evenly from the smallest finite value to the largest.
+    Linear,
+    /// Evenly in `ln v`: for positive values that span decades (rays per pixel of an adaptive
+    /// render, 64 … 12,000), where a linear scale leaves most pixels at its dark end. Falls
+    /// back to linear where a value is 0 or negative.
+    Log,
+}
+
 /// A false-colour picture of `values` (`width × height`, row-major) on viridis, from their
 /// smallest finite value (dark) to their largest (yellow), with a legend bar under it that
 /// names `label` and the two ends. NaN (background) is black, `+inf` white.
 pub fn false_colour(values: &[f32], width: u32, height: u32, label: &str) -> RgbImage {
+    false_colour_scaled(values, width, height, label, ColourScale::Linear)
+}
+
+/// [`false_colour`] on `scale`; a log scale's legend also names its geometric middle, under
+/// the bar's centre, and says "log".
+pub fn false_colour_scaled(
+    values: &[f32],
+    width: u32,
+    height: u32,
+    label: &str,
+    scale: ColourScale,
+) -> RgbImage {
     let finite = values.iter().copied().filter(|v| v.is_finite());
     let (lo, hi) = finite.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), v| {
         (lo.min(v), hi.max(v))
     });
     let (lo, hi) = if lo <= hi { (lo, hi) } else { (0.0, 1.0) };
-    let span = if hi > lo { hi - lo } else { 1.0 };
+    let log = scale == ColourScale::Log && lo > 0.0 && hi > lo;
+    // Where a value sits between the ends, 0 to 1, and back.
+    let position = |v: f32| -> f32 {
+        if log {
+            (v / lo).ln() / (hi / lo).ln()
+        } else if hi > lo {
+            (v - lo) / (hi - lo)
+        } else {
+            0.0
+        }
+    };
     let picture_width = width.max(LEGEND_MIN_WIDTH);
     let mut out = RgbImage::from_pixel(picture_width, height + LEGEND_HEIGHT, Rgb([255, 255, 255]));
     for y in 0..height {
@@ -71,7 +104,7 @@ pub fn false_colour(values: &[f32], width: u32, height: u32, label: &str) -> Rgb
             } else if v == f32::INFINITY {
                 Rgb([255, 255, 255])
             } else {
-                viridis((v - lo) / span)
+                viridis(position(v))
             };
             out.put_pixel(x, y, colour);
         }
@@ -90,8 +123,13 @@ pub fn false_colour(values: &[f32], width: u32, height: u32, label: &str) -> Rgb
     draw_text(&mut out, margin, text_top, &low, 1, ink);
     let high_left = picture_width - margin - 8 * high.len() as u32;
     draw_text(&mut out, high_left, text_top, &high, 1, ink);
+    let label = if log {
+        format!("{label} (log; mid {})", format_value((lo * hi).sqrt().round()))
+    } else {
+        label.to_string()
+    };
     let middle = (picture_width / 2).saturating_sub(4 * label.len() as u32);
-    draw_text(&mut out, middle, text_top, label, 1, ink);
+    draw_text(&mut out, middle, text_top, &label, 1, ink);
     out
 }
 
@@ -146,4 +184,23 @@ where
         .write_to(&mut bytes, ImageFormat::Png)
         .map_err(|e| Error::file(path, format!("cannot encode PNG: {e}")))?;
     Ok(bytes.into_inner())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_log_scale_puts_the_geometric_middle_at_the_middle_colour() {
+        let values = [1.0, 10.0, 100.0];
+        let log = false_colour_scaled(&values, 3, 1, "rays", ColourScale::Log);
+        assert_eq!(*log.get_pixel(0, 0), viridis(0.0));
+        assert_eq!(*log.get_pixel(1, 0), viridis(0.5));
+        assert_eq!(*log.get_pixel(2, 0), viridis(1.0));
+        let linear = false_colour(&values, 3, 1, "rays");
+        assert_eq!(*linear.get_pixel(1, 0), viridis(9.0 / 99.0));
+        // Zero or negative values cannot go on a log scale: linear instead.
+        let with_zero = false_colour_scaled(&[0.0, 5.0, 10.0], 3, 1, "rays", ColourScale::Log);
+        assert_eq!(*with_zero.get_pixel(1, 0), viridis(0.5));
+    }
 }
