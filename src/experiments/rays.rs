@@ -280,8 +280,30 @@ fn table1_findings(sweep: &RaySweep) -> Vec<String> {
     let falls = below_level_off
         .windows(2)
         .all(|w| w[1].gather_f_diff < w[0].gather_f_diff);
+    // From the level-off on, a step of more than ×0.95 is flat or up: the paper's
+    // oscillation (its scene A steps ×1.42 once, its scene B ×0.99).
+    let late: Vec<f64> = sweep
+        .rows
+        .windows(2)
+        .filter(|w| w[0].rays >= paper::LEVEL_OFF_RAYS)
+        .map(|w| w[1].gather_f_diff / w[0].gather_f_diff)
+        .collect();
+    let largest = late.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let from_level_off = if late.is_empty() {
+        "the run has no ray counts past it".to_string()
+    } else if largest > 0.95 {
+        format!(
+            "from {} rays on it oscillates (a step of ×{largest:.2})",
+            paper::LEVEL_OFF_RAYS
+        )
+    } else {
+        format!(
+            "from {} rays on it keeps falling at every step (at most ×{largest:.2}): no oscillation",
+            paper::LEVEL_OFF_RAYS
+        )
+    };
     vec![format!(
-        "Final gathering's error falls with each doubling of rays, then oscillates down slowly from about {} rays (paper): {} up to {} rays; per doubling {}.",
+        "Final gathering's error falls with each doubling of rays, then oscillates down slowly from about {} rays (paper): {} up to {} rays; {from_level_off}. Per doubling {}.",
         paper::LEVEL_OFF_RAYS,
         if falls { "it falls at every step" } else { "it does NOT fall at every step" },
         paper::LEVEL_OFF_RAYS / 2,
