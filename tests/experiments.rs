@@ -74,6 +74,16 @@ fn quick_table1_on_cube_falls_with_rays_and_the_report_links_only_existing_files
         );
     }
 
+    // `cube` stands for the paper's scene A: its plot draws the paper's values beside ours.
+    let svg = std::fs::read_to_string(out.join("table1.svg")).unwrap();
+    for label in [
+        "gather",
+        "paper CPU, scene A (as read)",
+        "paper GPU, scene A (as read)",
+    ] {
+        assert!(svg.contains(&format!("\n{label}\n")), "{label} in table1.svg");
+    }
+
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
     let links = hrefs(&html);
     assert!(links.iter().any(|l| l == "table1.csv"), "{links:?}");
@@ -639,4 +649,83 @@ fn fig11_compares_the_cube_map_at_the_reference_rays_with_the_reference_and_shar
         .unwrap();
     second.run("fig9").unwrap();
     assert_eq!(renders.0.load(std::sync::atomic::Ordering::Relaxed), 1);
+}
+
+#[test]
+fn the_cost_plot_has_every_image_of_tables_1_to_3_and_its_front_is_the_undominated_ones() {
+    use hmdist::experiments::Table;
+    let dir = Scratch::new("experiments-cost");
+    let out = dir.join("out");
+    let runner = || {
+        Runner::new("slab", Preset::Quick, &out, &Silent)
+            .unwrap()
+            .with_size(Some(8))
+            .unwrap()
+    };
+    // Before the tables exist it says so and plots nothing.
+    runner().run("cost").unwrap();
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(
+        html.contains("Not found in this folder: table1, table2, table3"),
+        "{html}"
+    );
+    assert!(!out.join("cost.svg").exists());
+
+    runner().run("table1,table2,table3,table4,cost").unwrap();
+    let read = |name: &str| Table::read_csv(&out.join(name)).unwrap().unwrap();
+    let (table2, table3, cost) = (read("table2.csv"), read("table3.csv"), read("cost.csv"));
+    let at = |t: &Table, row: &[String], name: &str| -> f64 { row[t.column(name).unwrap()].parse().unwrap() };
+    let p = Preset::Quick.params();
+    assert_eq!(
+        cost.rows.len(),
+        2 * p.rays.len() + 2 * p.photons.len() * p.gathers.len(),
+        "gather and cube map by N, methods I and II by photons and K:\n{}",
+        cost.csv()
+    );
+    // Each image's seconds are its table's: gather's Table 2's, a photon image's Table 3's
+    // gather and its map's build (more than the gather alone).
+    for row in &table2.rows {
+        let n = format!("N = {}", row[0]);
+        let ours = cost.rows.iter().find(|r| r[0] == "gather" && r[1] == n).unwrap();
+        let (a, b) = (at(&cost, ours, "seconds"), at(&table2, row, "gather s"));
+        assert!((a - b).abs() <= 1e-3 * b.max(1.0), "{a} against Table 2's {b}");
+    }
+    for row in &table3.rows {
+        let k = row[table3.column("K").unwrap()].clone();
+        let ours = cost
+            .rows
+            .iter()
+            .filter(|r| r[0] == "photon II" && r[1].ends_with(&format!("K = {k}")))
+            .map(|r| at(&cost, r, "seconds"))
+            .collect::<Vec<_>>();
+        assert!(
+            ours.iter().any(|&s| s > at(&table3, row, "II gather s")),
+            "{ours:?}"
+        );
+    }
+    // On the front exactly where no other image is as fast and more accurate, or faster and
+    // as accurate (of images equal in both, the first listed).
+    let points: Vec<(f64, f64)> = cost
+        .rows
+        .iter()
+        .map(|r| (at(&cost, r, "seconds"), at(&cost, r, "f_diff")))
+        .collect();
+    for (i, (row, &(s, f))) in cost.rows.iter().zip(&points).enumerate() {
+        let beaten = points.iter().enumerate().any(|(j, &(s2, f2))| {
+            (s2 <= s && f2 < f) || (s2 < s && f2 <= f) || (s2 == s && f2 == f && j < i)
+        });
+        assert_eq!(
+            row[cost.column("on the front").unwrap()] == "yes",
+            !beaten,
+            "{row:?}"
+        );
+    }
+    assert!(cost.rows.iter().any(|r| r[4] == "yes"));
+    assert!(out.join("cost.svg").exists());
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.contains("<h2 id=\"cost\">"), "{html}");
+    assert!(
+        html.contains("Which estimator for which accuracy at which cost"),
+        "{html}"
+    );
 }

@@ -29,7 +29,7 @@ python3 - "$out/index.html" "$dest/index.html" "$run" <<'PY'
 import os, re, sys
 
 source, target, run = sys.argv[1], sys.argv[2], sys.argv[3]
-ORDER = ["table1", "table2", "fig9", "fig11", "table3", "fig10", "table4", "fig16_17", "adaptive", "memory"]
+ORDER = ["table1", "table2", "fig9", "fig11", "table3", "fig10", "table4", "fig16_17", "adaptive", "memory", "cost"]
 
 def parse(html):
     """(head up to <body>, intro: h1 and its paragraph, preamble before the first section,

@@ -10,10 +10,12 @@
 //!
 //! The experiments are listed once, in [`EXPERIMENTS`]: the ray studies (`rays.rs`: Tables
 //! 1–2, Fig. 9), the photon studies (`photons.rs`: Tables 3–4, Fig. 10, 16/17, memory) and
-//! the adaptive study (`adaptive.rs`: rays saved at equal f_diff).
+//! the adaptive study (`adaptive.rs`: rays saved at equal f_diff), and accuracy against cost
+//! over them all (`cost.rs`).
 //! The paper's published numbers are in [`paper`].
 
 mod adaptive;
+mod cost;
 mod grid;
 pub mod paper;
 mod photons;
@@ -115,6 +117,12 @@ pub const EXPERIMENTS: &[Experiment] = &[
         summary: "bytes per photon against the paper's",
         images: |_| 0,
         run: photons::memory,
+    },
+    Experiment {
+        name: "cost",
+        summary: "f_diff against seconds of every image of Tables 1–3, with the Pareto front (renders nothing: run after them)",
+        images: |_| 0,
+        run: cost::cost,
     },
 ];
 

@@ -93,6 +93,25 @@ pub fn table1_as_read(rays: u32) -> Option<(f64, f64, f64)> {
     Some((TABLE1_CPU_A[i], TABLE1_CPU_B[i], TABLE1_GPU_A[i]))
 }
 
+/// `(rays, f_diff)` points of a Table 1 row.
+pub type RaysFdiff = Vec<(u32, f64)>;
+
+/// Table 1 as read ([`table1_as_read`]) as `(rays, f_diff)` points: CPU final gathering in
+/// `scene`, and the GPU cube map where the paper gives it (scene A only).
+pub fn table1_points(scene: PaperScene) -> (RaysFdiff, Option<RaysFdiff>) {
+    let read: Vec<(u32, (f64, f64, f64))> = TABLE1_HEADED_RAYS
+        .iter()
+        .filter_map(|&rays| Some((rays, table1_as_read(rays)?)))
+        .collect();
+    match scene {
+        PaperScene::A => (
+            read.iter().map(|&(n, (cpu_a, _, _))| (n, cpu_a)).collect(),
+            Some(read.iter().map(|&(n, (_, _, gpu_a))| (n, gpu_a)).collect()),
+        ),
+        PaperScene::B => (read.iter().map(|&(n, (_, cpu_b, _))| (n, cpu_b)).collect(), None),
+    }
+}
+
 /// One row of [`TABLE2`].
 pub struct Table2Row {
     /// Gather rays per pixel.
@@ -189,19 +208,26 @@ pub const BOUNCES: [u32; 2] = [20, 80];
 /// Table 4: seconds to build the photon map (80 bounces, kd-tree included), every row of
 /// the paper.
 pub const TABLE4: [Table4Row; 7] = [
-    Table4Row::new("130 K", 1.6, 1.0),
-    Table4Row::new("260 K", 2.7, 1.9),
-    Table4Row::new("530 K", 4.9, 3.8),
-    Table4Row::new("1.06 M", 9.4, 6.4),
-    Table4Row::new("2.13 M", 18.9, 12.1),
-    Table4Row::new("4.26 M", 38.9, 26.2),
-    Table4Row::new("8.53 M", 83.8, 54.4),
+    Table4Row::new("130 K", 130_000, 1.6, 1.0),
+    Table4Row::new("260 K", 260_000, 2.7, 1.9),
+    Table4Row::new("530 K", 530_000, 4.9, 3.8),
+    Table4Row::new("1.06 M", 1_060_000, 9.4, 6.4),
+    Table4Row::new("2.13 M", 2_130_000, 18.9, 12.1),
+    Table4Row::new("4.26 M", 4_260_000, 38.9, 26.2),
+    Table4Row::new("8.53 M", 8_530_000, 83.8, 54.4),
 ];
+
+/// The row of [`TABLE4`] for a map of `photons`, if the paper has one.
+pub fn table4_row(photons: usize) -> Option<&'static Table4Row> {
+    TABLE4.iter().find(|r| r.count == photons)
+}
 
 /// One row of [`TABLE4`].
 pub struct Table4Row {
     /// Photons stored, as the paper writes it.
     pub photons: &'static str,
+    /// Photons stored, as a number (Table 3's row of the same map).
+    pub count: usize,
     /// Light source, seconds.
     pub light_seconds: f64,
     /// Camera source, seconds.
@@ -209,9 +235,10 @@ pub struct Table4Row {
 }
 
 impl Table4Row {
-    const fn new(photons: &'static str, light_seconds: f64, camera_seconds: f64) -> Self {
+    const fn new(photons: &'static str, count: usize, light_seconds: f64, camera_seconds: f64) -> Self {
         Table4Row {
             photons,
+            count,
             light_seconds,
             camera_seconds,
         }

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use super::grid::{write_grid, Tile};
 use super::paper;
-use super::plot::{log_log, Series};
+use super::plot::{log_log_beside_paper, Series};
 use super::rays::reference;
 use super::{Runner, Section, Table};
 use crate::accel::{Accel, BuildQuality};
@@ -42,7 +42,7 @@ fn photon_config(photons: usize, k: usize, source: SourceKind, max_bounces: u32)
 }
 
 /// The light source where the scene has a spot light, else the camera.
-fn default_source(runner: &Runner) -> SourceKind {
+pub(super) fn default_source(runner: &Runner) -> SourceKind {
     if runner.scene.light.is_some() {
         SourceKind::Light
     } else {
@@ -404,12 +404,31 @@ pub fn table4(runner: &Runner) -> Result<Section> {
     let mut files = ours.write(&runner.out, "table4")?;
     files.extend(published.write(&runner.out, "table4_paper")?);
     let plot = runner.out.join("table4.svg");
-    log_log(
+    // The paper's build seconds, each source beside ours in its colour.
+    let paper_series: Vec<Series> = sources
+        .iter()
+        .map(|(name, _)| Series {
+            label: format!("paper, {name} source"),
+            points: paper::TABLE4
+                .iter()
+                .map(|r| {
+                    let seconds = if *name == "light" {
+                        r.light_seconds
+                    } else {
+                        r.camera_seconds
+                    };
+                    (r.count as f64, seconds)
+                })
+                .collect(),
+        })
+        .collect();
+    log_log_beside_paper(
         &plot,
         "photon map build (trace + kd-tree)",
         "photons stored",
         "seconds",
         &series,
+        &paper_series,
     )?;
     files.push(plot);
     Ok(Section {

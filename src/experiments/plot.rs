@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use crate::error::{Error, Result};
 use crate::image::write_atomically;
@@ -16,43 +17,130 @@ pub struct Series {
     pub points: Vec<(f64, f64)>,
 }
 
-const COLOURS: [RGBColor; 5] = [
+const COLOURS: [RGBColor; 6] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
     RGBColor(148, 103, 189),
     RGBColor(255, 127, 14),
+    RGBColor(140, 86, 75),
 ];
 
-/// A log-log plot of `series` written to `path` (SVG). Points with non-positive or non-finite
-/// coordinates are left out (they have no place on log axes).
+/// How a series is drawn: points joined by a line or not, markers filled or hollow (a
+/// hollow series is joined by a dashed line), in which colour.
+#[derive(Clone, Copy, Debug)]
+pub struct Marks {
+    /// Points joined in order.
+    pub joined: bool,
+    /// Hollow markers and a dashed line: a second source beside the first (the paper's).
+    pub hollow: bool,
+    /// The colour's place in the palette; `None`: the series' own place in the plot.
+    pub colour: Option<usize>,
+}
+
+impl Marks {
+    /// Filled markers joined by a line.
+    pub const LINE: Marks = Marks {
+        joined: true,
+        hollow: false,
+        colour: None,
+    };
+    /// Filled markers alone.
+    pub const POINTS: Marks = Marks {
+        joined: false,
+        hollow: false,
+        colour: None,
+    };
+    /// Hollow markers joined by a dashed line.
+    pub const HOLLOW: Marks = Marks {
+        joined: true,
+        hollow: true,
+        colour: None,
+    };
+
+    /// These marks in the palette's colour `place` (the same thing in the same colour across
+    /// plots, whichever series a plot lacks).
+    pub const fn coloured(self, place: usize) -> Marks {
+        Marks {
+            colour: Some(place),
+            ..self
+        }
+    }
+}
+
+/// A log-log plot of `series` written to `path` (SVG), each a line through its points. Points
+/// with non-positive or non-finite coordinates are left out (they have no place on log axes).
 pub fn log_log(path: &Path, title: &str, x_label: &str, y_label: &str, series: &[Series]) -> Result<()> {
+    let drawn: Vec<(&Series, Marks)> = series.iter().map(|s| (s, Marks::LINE)).collect();
+    log_log_with(path, title, x_label, y_label, &drawn, &[])
+}
+
+/// A log-log plot of `ours`, each a line through its points, and beside them `paper`, the
+/// paper's values of the same things: `paper[i]` hollow and dashed in `ours[i]`'s colour.
+pub fn log_log_beside_paper(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    ours: &[Series],
+    paper: &[Series],
+) -> Result<()> {
+    let drawn: Vec<(&Series, Marks)> = ours
+        .iter()
+        .enumerate()
+        .map(|(i, s)| (s, Marks::LINE.coloured(i)))
+        .chain(
+            paper
+                .iter()
+                .enumerate()
+                .map(|(i, s)| (s, Marks::HOLLOW.coloured(i))),
+        )
+        .collect();
+    log_log_with(path, title, x_label, y_label, &drawn, &[])
+}
+
+/// A log-log plot of `series`, each drawn as its [`Marks`] say, with a front where `front`
+/// has points: they are joined (in order along x) by a black staircase (the best y reached by
+/// each x), each labelled with its text (an empty text: no label).
+pub fn log_log_with(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[(&Series, Marks)],
+    front: &[(f64, f64, String)],
+) -> Result<()> {
     let fail = |e: &dyn std::fmt::Display| Error::file(path, format!("cannot draw the plot: {e}"));
     let usable = |&(x, y): &(f64, f64)| x > 0.0 && y > 0.0 && x.is_finite() && y.is_finite();
     let all: Vec<(f64, f64)> = series
         .iter()
-        .flat_map(|s| s.points.iter().copied().filter(usable))
+        .flat_map(|(s, _)| s.points.iter().copied().filter(usable))
         .collect();
     if all.is_empty() {
         return Err(Error::parameter(format!("nothing to plot in {}", path.display())));
     }
-    let range = |f: fn(&(f64, f64)) -> f64| {
+    // Room left of the data for the front's labels, which sit left of their points.
+    let left_room = if front.is_empty() { 1.5 } else { 8.0 };
+    let range = |f: fn(&(f64, f64)) -> f64, room: f64| {
         let (lo, hi) = all
             .iter()
             .map(f)
             .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
-        (lo / 1.5)..(hi * 1.5)
+        (lo / room)..(hi * 1.5)
     };
+    let (x_range, y_range) = (range(|p| p.0, left_room), range(|p| p.1, 1.5));
+    let legend = emptiest_corner(&all, (x_range.start, x_range.end), (y_range.start, y_range.end));
+    let size = if front.is_empty() { (720, 480) } else { (900, 600) };
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (720, 480)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
         root.fill(&WHITE).map_err(|e| fail(&e))?;
         let mut chart = ChartBuilder::on(&root)
             .caption(title, ("sans-serif", 20))
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(60)
-            .build_cartesian_2d(range(|p| p.0).log_scale(), range(|p| p.1).log_scale())
+            .build_cartesian_2d(x_range.log_scale(), y_range.log_scale())
             .map_err(|e| fail(&e))?;
         chart
             .configure_mesh()
@@ -63,19 +151,68 @@ pub fn log_log(path: &Path, title: &str, x_label: &str, y_label: &str, series: &
             .y_label_formatter(&|v| short(*v))
             .draw()
             .map_err(|e| fail(&e))?;
-        for (s, colour) in series.iter().zip(COLOURS.iter().cycle()) {
+        for (place, (s, marks)) in series.iter().enumerate() {
+            let colour = &COLOURS[marks.colour.unwrap_or(place) % COLOURS.len()];
             let points: Vec<(f64, f64)> = s.points.iter().copied().filter(usable).collect();
+            let line = colour.stroke_width(if marks.hollow { 1 } else { 2 });
+            match (marks.joined, marks.hollow) {
+                (true, false) => chart.draw_series(LineSeries::new(points.clone(), line)),
+                (true, true) => chart.draw_series(DashedLineSeries::new(points.clone(), 6, 4, line)),
+                (false, _) => chart.draw_series(std::iter::empty::<Circle<(f64, f64), i32>>()),
+            }
+            .map_err(|e| fail(&e))?
+            .label(&s.label)
+            .legend(move |(x, y)| {
+                let dot = Circle::new((10, 0), 3, if marks.hollow { line } else { colour.filled() });
+                let stroke = if marks.joined {
+                    line
+                } else {
+                    colour.mix(0.0).into()
+                };
+                EmptyElement::at((x, y)) + PathElement::new([(0, 0), (20, 0)], stroke) + dot
+            });
+            let marker = if marks.hollow {
+                colour.stroke_width(1)
+            } else {
+                colour.filled()
+            };
             chart
-                .draw_series(LineSeries::new(points.clone(), colour.stroke_width(2)))
+                .draw_series(
+                    points
+                        .into_iter()
+                        .map(|p| Circle::new(p, if marks.hollow { 4 } else { 3 }, marker)),
+                )
+                .map_err(|e| fail(&e))?;
+        }
+        if !front.is_empty() {
+            // The staircase: from each front point right to the next one's x, then down to it.
+            let mut stairs = vec![(front[0].0, front[0].1)];
+            for pair in front.windows(2) {
+                stairs.push((pair[1].0, pair[0].1));
+                stairs.push((pair[1].0, pair[1].1));
+            }
+            chart
+                .draw_series(LineSeries::new(stairs, BLACK.stroke_width(1)))
                 .map_err(|e| fail(&e))?
-                .label(&s.label)
-                .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], colour.stroke_width(2)));
+                .label("Pareto front")
+                .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK.stroke_width(1)));
+            // Labels below and left of their points: the front falls to the right, so that
+            // corner holds no image (one there would be faster and more accurate).
+            let font = ("sans-serif", 11)
+                .into_font()
+                .color(&BLACK)
+                .pos(Pos::new(HPos::Right, VPos::Top));
             chart
-                .draw_series(points.into_iter().map(|p| Circle::new(p, 3, colour.filled())))
+                .draw_series(front.iter().map(|(x, y, text)| {
+                    EmptyElement::at((*x, *y))
+                        + Circle::new((0, 0), 5, BLACK.stroke_width(1))
+                        + Text::new(text.clone(), (-5, 5), font.clone())
+                }))
                 .map_err(|e| fail(&e))?;
         }
         chart
             .configure_series_labels()
+            .position(legend)
             .background_style(WHITE.mix(0.8))
             .border_style(BLACK)
             .draw()
@@ -83,6 +220,32 @@ pub fn log_log(path: &Path, title: &str, x_label: &str, y_label: &str, series: &
         root.present().map_err(|e| fail(&e))?;
     }
     write_atomically(path, svg.as_bytes())
+}
+
+/// The corner of a log-log plot over `x` and `y` where the legend covers the fewest of
+/// `points` (the first of upper right, upper left, lower right, lower left on a tie).
+fn emptiest_corner(points: &[(f64, f64)], x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosition {
+    let place = |v: f64, (lo, hi): (f64, f64)| (v / lo).ln() / (hi / lo).ln();
+    // The legend's box, as fractions of the plot: 40 % wide, 30 % high.
+    let corners = [
+        (SeriesLabelPosition::UpperRight, true, true),
+        (SeriesLabelPosition::UpperLeft, false, true),
+        (SeriesLabelPosition::LowerRight, true, false),
+        (SeriesLabelPosition::LowerLeft, false, false),
+    ];
+    let covered = |right: bool, upper: bool| {
+        points
+            .iter()
+            .filter(|&&(px, py)| {
+                let (u, v) = (place(px, x), place(py, y));
+                (if right { u > 0.6 } else { u < 0.4 }) && (if upper { v > 0.7 } else { v < 0.3 })
+            })
+            .count()
+    };
+    corners
+        .into_iter()
+        .min_by_key(|&(_, right, upper)| covered(right, upper))
+        .map_or(SeriesLabelPosition::UpperRight, |(corner, _, _)| corner)
 }
 
 /// A tick label without float noise: 3 significant digits.

@@ -3,7 +3,7 @@
 
 use super::grid::{write_grid, Tile};
 use super::paper;
-use super::plot::{log_log, Series};
+use super::plot::{log_log_beside_paper, Series};
 use super::{Runner, Section, Table, REFERENCE_SEED};
 use crate::error::Result;
 use crate::estimators::cubemap::GpuFill;
@@ -238,7 +238,24 @@ pub fn table1(runner: &Runner) -> Result<Section> {
     let mut files = ours.write(&runner.out, "table1")?;
     files.extend(published.write(&runner.out, "table1_paper")?);
     let plot = runner.out.join("table1.svg");
-    log_log(
+    let mut paper_series = vec![];
+    if let Some(scene) = paper::analogue(&runner.scene.name) {
+        let name = if scene == paper::PaperScene::A { "A" } else { "B" };
+        let as_xy = |points: Vec<(u32, f64)>| points.into_iter().map(|(n, f)| (n as f64, f)).collect();
+        let (cpu, gpu) = paper::table1_points(scene);
+        paper_series.push(Series {
+            label: format!("paper CPU, scene {name} (as read)"),
+            points: as_xy(cpu),
+        });
+        // The paper's GPU cube map beside ours only where ours is drawn (same colour).
+        if let (Some(gpu), Some(_)) = (gpu, &cubemap) {
+            paper_series.push(Series {
+                label: format!("paper GPU, scene {name} (as read)"),
+                points: as_xy(gpu),
+            });
+        }
+    }
+    log_log_beside_paper(
         &plot,
         "f_diff against the reference",
         "gather rays N",
@@ -248,6 +265,7 @@ pub fn table1(runner: &Runner) -> Result<Section> {
             |r| Some(r.gather_f_diff),
             |r| r.cubemap.map(|c| c.f_diff),
         ),
+        &paper_series,
     )?;
     files.push(plot);
     files.extend(ray_grids(runner, &sweep)?);
@@ -372,7 +390,14 @@ pub fn table2(runner: &Runner) -> Result<Section> {
     let mut files = ours.write(&runner.out, "table2")?;
     files.extend(published.write(&runner.out, "table2_paper")?);
     let plot = runner.out.join("table2.svg");
-    log_log(
+    let paper_seconds = |label: &str, seconds: fn(&paper::Table2Row) -> f64| Series {
+        label: label.into(),
+        points: paper::TABLE2
+            .iter()
+            .map(|r| (r.rays as f64, seconds(r)))
+            .collect(),
+    };
+    log_log_beside_paper(
         &plot,
         "seconds per image",
         "gather rays N",
@@ -382,6 +407,10 @@ pub fn table2(runner: &Runner) -> Result<Section> {
             |r| Some(r.gather_seconds),
             |r| r.cubemap.map(|c| c.seconds),
         ),
+        &[
+            paper_seconds("paper CPU (Xeon E5420)", |r| r.cpu_seconds),
+            paper_seconds("paper GPU (8800 GTX)", |r| r.gpu_seconds),
+        ],
     )?;
     files.push(plot);
     Ok(Section {

@@ -3,7 +3,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::image::write_atomically;
 
 /// A titled table of strings; the first column names the rows.
@@ -59,6 +59,41 @@ impl Table {
         out
     }
 
+    /// A table read back from the CSV [`Table::csv`] writes (no title): quoted cells
+    /// unquoted. `None` where `path` does not exist; an error where a row's cells are not as
+    /// many as the header's.
+    pub fn read_csv(path: &Path) -> Result<Option<Table>> {
+        let text = match std::fs::read_to_string(path) {
+            Ok(text) => text,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+            Err(e) => return Err(Error::file(path, format!("cannot read it: {e}"))),
+        };
+        let mut lines = text.lines().map(csv_cells);
+        let header = lines.next().unwrap_or_default();
+        let rows: Vec<Vec<String>> = lines.collect();
+        if let Some(i) = rows.iter().position(|r| r.len() != header.len()) {
+            return Err(Error::file(
+                path,
+                format!(
+                    "row {} has {} cells, the header {}",
+                    i + 1,
+                    rows[i].len(),
+                    header.len()
+                ),
+            ));
+        }
+        Ok(Some(Table {
+            title: String::new(),
+            header,
+            rows,
+        }))
+    }
+
+    /// The column named `name`, if there is one.
+    pub fn column(&self, name: &str) -> Option<usize> {
+        self.header.iter().position(|h| h == name)
+    }
+
     /// Writes `NAME.csv` and `NAME.md` into `dir`; returns their paths.
     pub fn write(&self, dir: &Path, name: &str) -> Result<Vec<PathBuf>> {
         let (csv, md) = (dir.join(format!("{name}.csv")), dir.join(format!("{name}.md")));
@@ -66,6 +101,25 @@ impl Table {
         write_atomically(&md, self.markdown().as_bytes())?;
         Ok(vec![csv, md])
     }
+}
+
+/// One CSV line's cells, as [`Table::csv`] quotes them (a table's cells hold no line breaks).
+fn csv_cells(line: &str) -> Vec<String> {
+    let mut cells = vec![String::new()];
+    let mut quoted = false;
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match (c, quoted) {
+            ('"', true) if chars.peek() == Some(&'"') => {
+                chars.next();
+                cells.last_mut().unwrap().push('"');
+            }
+            ('"', _) => quoted = !quoted,
+            (',', false) => cells.push(String::new()),
+            _ => cells.last_mut().unwrap().push(c),
+        }
+    }
+    cells
 }
 
 #[cfg(test)]
@@ -78,5 +132,21 @@ mod tests {
         t.push(vec!["1".into(), "x,y".into()]);
         assert_eq!(t.csv(), "a,b\n1,\"x,y\"\n");
         assert_eq!(t.markdown(), "### T\n\n| a | b |\n|---|---|\n| 1 | x,y |\n");
+    }
+
+    #[test]
+    fn a_table_read_back_from_its_csv_has_the_same_cells() {
+        let mut t = Table::new("T", &["rays", "paper CPU, A", "say \"hi\""]);
+        t.push(vec!["32".into(), "0.5971".into(), "a, \"b\"".into()]);
+        t.push(vec!["64".into(), String::new(), "c".into()]);
+        let dir = std::env::temp_dir().join(format!("hmdist-table-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = t.write(&dir, "t").unwrap().remove(0);
+        let back = Table::read_csv(&path).unwrap().unwrap();
+        assert_eq!((back.header, back.rows), (t.header, t.rows));
+        assert!(Table::read_csv(&dir.join("none.csv")).unwrap().is_none());
+        std::fs::write(&path, "a,b\n1\n").unwrap();
+        assert!(Table::read_csv(&path).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
