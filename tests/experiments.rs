@@ -309,6 +309,21 @@ fn a_plan_lists_each_image_once_and_exactly_those_a_run_then_renders_once_each()
     let renders = Renders::default();
     let mut runner = Runner::new("slab", Preset::Quick, &out, &renders).unwrap();
     runner.run("all").unwrap();
+    // `all` ends with the cost plot over the tables it made, and Fig. 10 has its close-ups:
+    // three rows (windows) of three tiles (reference, I, II).
+    assert!(out.join("cost.svg").exists());
+    let crops = image::open(out.join("fig10_crops.png")).unwrap();
+    let window = 16 * 2 * 144_u32.div_ceil(32);
+    assert!(
+        crops.width() > 3 * window && crops.width() < 4 * window,
+        "{}",
+        crops.width()
+    );
+    assert!(
+        crops.height() > 3 * window && crops.height() < 4 * window,
+        "{}",
+        crops.height()
+    );
     assert_eq!(
         cached_stems(&out),
         distinct,

@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-use super::grid::{write_grid, Tile};
+use super::grid::{crop, windows_differing_most, write_grid, Tile};
 use super::paper;
 use super::plot::{log_log_beside_paper, Series};
 use super::rays::reference;
@@ -49,6 +49,9 @@ pub(super) fn default_source(runner: &Runner) -> SourceKind {
         SourceKind::Camera
     }
 }
+
+/// Fig. 10's close-ups: how many windows.
+const CROPS: usize = 3;
 
 /// One method's figures in one cell of Table 3.
 struct Table3Cell {
@@ -192,6 +195,7 @@ pub fn fig10(runner: &Runner) -> Result<Section> {
         picture: grey(&reference, s),
     })];
     let mut errors = vec![];
+    let mut images = vec![];
     for (_, method) in METHODS {
         let config = photon_config(photons, k, source, SHORT_PATHS);
         let (image, report) = runner.method_image(method, &config, 1)?;
@@ -206,11 +210,44 @@ pub fn fig10(runner: &Runner) -> Result<Section> {
             caption: method.into(),
             picture: grey(&image, s),
         }));
+        images.push(image);
     }
     let path = runner.out.join("fig10.png");
     write_grid(&path, &tiles, 3)?;
     let mut files = table.write(&runner.out, "fig10")?;
     files.push(path);
+    // The paper shows the fine parts close up (hands, feet): here the windows where the two
+    // methods differ most, at twice the size, each beside the reference.
+    let side = (p.size / 8).max(16).min(p.size);
+    let windows = windows_differing_most(&images[0], &images[1], side, CROPS);
+    let crops: Vec<Option<Tile>> = windows
+        .iter()
+        .flat_map(|&(x, y)| {
+            let at = format!(" at {x},{y}");
+            [
+                ("reference", &reference),
+                ("photon1", &images[0]),
+                ("photon2", &images[1]),
+            ]
+            .map(|(name, image)| {
+                Some(Tile {
+                    caption: format!("{name}{at}"),
+                    picture: crop(&grey(image, s), (x, y), side, 2),
+                })
+            })
+        })
+        .collect();
+    let notes = if crops.is_empty() {
+        vec![]
+    } else {
+        let path = runner.out.join("fig10_crops.png");
+        write_grid(&path, &crops, 3)?;
+        files.push(path);
+        vec![format!(
+            "fig10_crops.png: close-ups, as the paper's Fig. 10 shows the figures' hands and feet: the {} windows of {side}² pixels (x, y of the top-left corner) where methods I and II differ most, at twice the size; per row the reference, method I, method II.",
+            windows.len()
+        )]
+    };
     Ok(Section {
         name: "fig10".into(),
         tables: vec![table],
@@ -219,6 +256,7 @@ pub fn fig10(runner: &Runner) -> Result<Section> {
             "With very many photons and a very large K, method I's small distances spread into dark discs and method II avoids them (paper Fig. 10): f_diff {:.4} (I) against {:.4} (II).",
             errors[0], errors[1]
         )],
+        notes,
         ..Section::default()
     })
 }
