@@ -4,11 +4,9 @@ mod cli;
 
 use std::process::ExitCode;
 
-use clap::Parser;
-
 fn main() -> ExitCode {
     die_quietly_on_a_closed_pipe();
-    let args = cli::Cli::parse();
+    let args = cli::parse();
     let runtime_dir = quiet_headless_vulkan();
     let signals = cli::signals::Signals::catch();
     let code = match cli::run(args) {

@@ -100,7 +100,8 @@ impl Default for RenderOptions {
 }
 
 impl RenderOptions {
-    /// Refuses an empty or oversized image, a non-positive `max_distance` and zero threads.
+    /// Refuses an empty or oversized image, a non-positive `max_distance`, and zero threads or
+    /// more than [`max_threads`].
     pub fn validate(&self) -> Result<()> {
         let (w, h) = (self.width, self.height);
         if w == 0 || h == 0 {
@@ -112,15 +113,40 @@ impl RenderOptions {
             return Err(Error::invalid("size", message));
         }
         Error::check_positive("max_distance", self.max_distance)?;
-        if self.threads == Some(0) {
-            return Err(Error::invalid("threads", "must be at least 1, not 0"));
-        }
-        Ok(())
+        check_threads(self.threads)
     }
 }
 
-/// Runs `f` on a pool of `threads` workers (`None`: every core).
+/// The most worker threads a run takes: this many per CPU the process may use. More only
+/// slow a render down, and tens of thousands exhaust the machine before the first pixel.
+pub const MAX_THREADS_PER_CPU: usize = 4;
+
+/// The most worker threads a run takes here: [`MAX_THREADS_PER_CPU`] × the CPUs this process
+/// may use (at least 4 × 1).
+pub fn max_threads() -> usize {
+    MAX_THREADS_PER_CPU * std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// Refuses a thread count beyond [`max_threads`], before any thread is started.
+pub fn check_threads(threads: Option<usize>) -> Result<()> {
+    match threads {
+        Some(0) => Err(Error::invalid("threads", "must be at least 1, not 0")),
+        Some(n) if n > max_threads() => {
+            let cpus = max_threads() / MAX_THREADS_PER_CPU;
+            let message = format!(
+                "{n} is more than {MAX_THREADS_PER_CPU} per CPU this process may use ({cpus} CPUs: at most {})",
+                max_threads()
+            );
+            Err(Error::invalid("threads", message))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Runs `f` on a pool of `threads` workers (`None`: every core); refuses more than
+/// [`max_threads`].
 pub(crate) fn in_pool<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T> {
+    check_threads(threads)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.unwrap_or(0))
         .build()

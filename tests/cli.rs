@@ -23,6 +23,74 @@ fn bad_parameters_exit_2_with_a_message_and_no_output() {
 }
 
 #[test]
+fn flags_that_cannot_work_are_refused_before_anything_is_made() {
+    // More threads than 4 per CPU only slow a render down; tens of thousands take the machine
+    // (issue #51: 17,000 threads, load 1,700, a panic). 1,000 is beyond any CI machine's 4 × CPUs.
+    assert!(std::thread::available_parallelism().unwrap().get() * 4 < 1000);
+    refuses(
+        "threads-huge",
+        &[],
+        &render_args(&["--threads", "1000"]),
+        "--threads 1000 is more than 4 per CPU",
+    );
+    // A flag nothing reads is refused by name (SPEC §8): the AO radius without the ao AOV.
+    refuses(
+        "ao-radius-unread",
+        &[],
+        &render_args(&["--ao-radius", "1"]),
+        "--ao-radius is read only by the ao AOV",
+    );
+    refuses(
+        "ao-radius-unread-adaptive",
+        &[],
+        &[
+            "render",
+            "--quiet",
+            "--size",
+            "8x8",
+            "--method",
+            "adaptive",
+            "--ao-radius",
+            "1",
+        ],
+        "--ao-radius is read only by the ao AOV",
+    );
+    // A run refused for its flags creates no output folder.
+    refuses(
+        "experiment-size0",
+        &[],
+        &[
+            "experiment",
+            "table1",
+            "--size",
+            "0",
+            "--plan",
+            "--quiet",
+            "--out",
+            "o",
+        ],
+        "--size must be at least 1",
+    );
+    // A negative value, spaced or not, gets the message about the value, not clap's
+    // "unexpected argument '-1'".
+    for (flag, value, message) in [
+        ("--scale", "-1", "--scale must be a positive number, not -1"),
+        ("--max-distance", "-1", "--max-distance must be positive, not -1"),
+        ("--seed", "-1", "invalid value '-1' for '--seed"),
+    ] {
+        let stderr = refuses("negative", &[], &render_args(&[flag, value]), message);
+        assert!(!stderr.contains("unexpected argument"), "{stderr}");
+    }
+    let size = ["render", "--quiet", "--rays", "4", "--size", "-8x8"];
+    refuses(
+        "negative-size",
+        &[],
+        &size,
+        "'-8' in '-8x8' is not a whole number",
+    );
+}
+
+#[test]
 fn unreadable_and_unwritable_paths_exit_2() {
     refuses(
         "missing",

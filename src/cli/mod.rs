@@ -64,6 +64,26 @@ enum Command {
     Gpu(gpu::GpuCommand),
 }
 
+/// The command line as parsed: [`Cli`], with every flag that takes a value also taking a
+/// negative number as its value (`--scale -1`, `--seed -1`), and `--size` any value starting
+/// with `-` (`--size -8x8`), so that the message names the value's problem rather than
+/// calling `-1` an unknown flag.
+pub fn parse() -> Cli {
+    use clap::{CommandFactory, FromArgMatches};
+    fn negatives(command: clap::Command) -> clap::Command {
+        command
+            .mut_args(|arg| {
+                let takes_value = arg.get_action().takes_values() && !arg.is_positional();
+                let size = arg.get_id() == "size";
+                arg.allow_negative_numbers(takes_value)
+                    .allow_hyphen_values(takes_value && size)
+            })
+            .mut_subcommands(negatives)
+    }
+    let matches = negatives(Cli::command()).get_matches();
+    Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
+}
+
 pub fn run(cli: Cli) -> Result<ExitCode> {
     #[cfg(feature = "gpu")]
     if let Some(selector) = &cli.gpu {

@@ -270,11 +270,15 @@ impl Estimator for Adaptive {
         _: &'a GBuffer,
         _: &dyn Progress,
     ) -> Result<Prepared<'a>> {
-        if context.aovs.contains(&Aov::Ao) && self.ao_radius.is_none() {
-            return Err(Error::invalid(
-                "ao_radius",
-                "is needed for the ao AOV of adaptive",
-            ));
+        match (self.ao_radius, context.aovs.contains(&Aov::Ao)) {
+            (None, true) => {
+                return Err(Error::invalid(
+                    "ao_radius",
+                    "is needed for the ao AOV of adaptive",
+                ))
+            }
+            (Some(_), false) => return Err(Error::invalid("ao_radius", super::gather::AO_RADIUS_UNREAD)),
+            _ => {}
         }
         Ok(Prepared::Pixels {
             job: Box::new(AdaptivePixels {

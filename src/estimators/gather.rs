@@ -500,6 +500,10 @@ pub(crate) enum AoRadius {
     Median,
 }
 
+/// Why a radius given without the `ao` AOV is refused: nothing would read it (SPEC §8).
+pub(crate) const AO_RADIUS_UNREAD: &str =
+    "is read only by the ao AOV: ask for that AOV too, or leave the radius out";
+
 impl Gather {
     fn ao_radius(&self, context: &EstimateContext) -> Result<AoRadius> {
         Ok(match (self.ao_radius, context.aovs.contains(&Aov::Ao)) {
@@ -510,7 +514,8 @@ impl Gather {
                     "is needed for the ao AOV of a shard: the default, the median of H, is the whole image's";
                 return Err(Error::invalid("ao_radius", message));
             }
-            (_, false) => AoRadius::None,
+            (Some(_), false) => return Err(Error::invalid("ao_radius", AO_RADIUS_UNREAD)),
+            (None, false) => AoRadius::None,
         })
     }
 }

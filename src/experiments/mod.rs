@@ -328,8 +328,6 @@ impl<'a> Runner<'a> {
             scene.name,
             scene.fingerprint()
         );
-        std::fs::create_dir_all(out.join("cache"))
-            .map_err(|e| Error::io(out, "create the output folder of", e))?;
         Ok(Runner {
             scene,
             scene_key,
@@ -352,6 +350,13 @@ impl<'a> Runner<'a> {
             running: vec![],
             cubemaps: true,
         })
+    }
+
+    /// Creates the output folder and its cache, which the runner leaves alone until it has
+    /// something to write (a run refused for a bad flag creates nothing).
+    fn make_cache(&self) -> Result<()> {
+        std::fs::create_dir_all(&self.cache)
+            .map_err(|e| Error::io(&self.out, "create the output folder of", e))
     }
 
     /// Images `size` pixels square instead of the preset's (none: the preset's); at least 1.
@@ -488,6 +493,7 @@ impl<'a> Runner<'a> {
     /// only renders its share of the images, and a plan only calibrates (see [`plan`]).
     pub fn run(&mut self, name: &str) -> Result<()> {
         let experiments = select(name)?;
+        self.make_cache()?;
         self.running = experiments.iter().map(|e| e.name).collect();
         for experiment in &experiments {
             if let Some(plan) = &self.plan {
@@ -697,6 +703,7 @@ impl<'a> Runner<'a> {
         }
         let (cached_exr, cached_json) = self.cache_paths(&stem);
         if !cached_json.exists() {
+            self.make_cache()?;
             let bytes = std::fs::read(exr_path).map_err(|e| Error::io(exr_path, "read", e))?;
             write_atomically(&cached_exr, &bytes)?;
             write_atomically(&cached_json, text.as_bytes())?;
@@ -822,6 +829,7 @@ impl<'a> Runner<'a> {
         if count == 1 {
             return pass(options);
         }
+        self.make_cache()?;
         let mut parts: Vec<Vec<crate::shard::Part>> = stems.iter().map(|_| vec![]).collect();
         let mut files = vec![];
         for k in 0..count {
@@ -917,6 +925,7 @@ impl<'a> Runner<'a> {
     /// Writes a rendered image and its report into the cache as `stem`: the JSON last, so
     /// that an image counts as cached only once both files are in place.
     fn cache_image(&self, stem: &str, rendered: &crate::render::Rendered) -> Result<()> {
+        self.make_cache()?;
         let (exr_path, json_path) = self.cache_paths(stem);
         write_atomically(
             &exr_path,
