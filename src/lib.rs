@@ -66,6 +66,7 @@ pub mod error;
 pub mod estimators;
 #[cfg(feature = "experiments")]
 pub mod experiments;
+pub mod files;
 #[cfg(feature = "gpu")]
 pub mod gpu;
 pub mod image;

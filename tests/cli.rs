@@ -91,6 +91,118 @@ fn flags_that_cannot_work_are_refused_before_anything_is_made() {
 }
 
 #[test]
+fn no_output_lands_on_an_input_a_device_or_what_a_failed_run_would_replace() {
+    use common::cli::hmdist_ok;
+    let dir = Scratch::new("cli-inputs-kept");
+    let run = |args: &[&str]| hmdist(dir.path(), args);
+    let refused = |args: &[&str], message: &str| {
+        let out = run(args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(message), "{args:?}: {stderr}");
+    };
+    hmdist_ok(dir.path(), &["scene", "export", "sphere", "s.obj"]);
+    let scene = std::fs::read(dir.join("s.obj")).unwrap();
+    std::os::unix::fs::symlink("s.obj", dir.join("link.obj")).unwrap();
+    fn render<'a>(extra: &[&'a str]) -> Vec<&'a str> {
+        [&["render", "--quiet", "--size", "8x8", "--rays", "4"], extra].concat()
+    }
+    // 1. An output that is an input, by its name or through a link, is refused.
+    let is_input = "is an input of this command";
+    refused(&render(&["--scene", "s.obj", "--out", "s.obj"]), is_input);
+    refused(&render(&["--scene", "s.obj", "--json", "s.obj"]), is_input);
+    refused(
+        &render(&["--scene", "link.obj", "--out", "s.obj"]),
+        "is the same file as the input link.obj",
+    );
+    std::fs::write(dir.join("p.csv"), "0 0 0 0 0 1\n").unwrap();
+    refused(&["points", "--scene", "cube", "p.csv", "p.csv"], is_input);
+    hmdist_ok(dir.path(), &render(&["--out", "x.exr"]));
+    hmdist_ok(dir.path(), &render(&["--seed", "2", "--out", "r.exr"]));
+    let image = std::fs::read(dir.join("x.exr")).unwrap();
+    refused(&["diff", "r.exr", "x.exr", "--png", "x.exr"], is_input);
+    for k in 0..2 {
+        hmdist_ok(
+            dir.path(),
+            &render(&["--shard", &format!("{k}/2"), "--out", &format!("p{k}.exr")]),
+        );
+    }
+    let part = std::fs::read(dir.join("p1.json")).unwrap();
+    refused(&["merge", "p1.exr", "p0.exr", "p1.exr"], is_input);
+    refused(
+        &["merge", "out.exr", "p0.exr", "p1.exr", "--json", "p1.json"],
+        is_input,
+    );
+    assert_eq!(
+        std::fs::read(dir.join("s.obj")).unwrap(),
+        scene,
+        "the scene is intact"
+    );
+    assert_eq!(
+        std::fs::read(dir.join("x.exr")).unwrap(),
+        image,
+        "the image under test is intact"
+    );
+    assert_eq!(
+        std::fs::read(dir.join("p1.json")).unwrap(),
+        part,
+        "the part's report is intact"
+    );
+
+    // 4. A run that fails leaves the earlier outputs as they were.
+    let old_png = std::fs::read(dir.join("x.png")).unwrap();
+    std::fs::remove_file(dir.join("x.json")).unwrap();
+    std::fs::create_dir(dir.join("x.json")).unwrap();
+    refused(
+        &render(&["--seed", "3", "--out", "x.exr"]),
+        "x.json: is a directory",
+    );
+    assert_eq!(std::fs::read(dir.join("x.exr")).unwrap(), image);
+    assert_eq!(std::fs::read(dir.join("x.png")).unwrap(), old_png);
+
+    // 6. A device is never renamed over (as root the test makes one; elsewhere /dev/null
+    // stands in, which no render may replace either).
+    let null = dir.join("null");
+    let made = std::process::Command::new("mknod")
+        .arg(&null)
+        .args(["c", "1", "3"])
+        .status();
+    let device = if made.is_ok_and(|s| s.success()) {
+        "null".to_string()
+    } else {
+        println!("mknod not permitted here: /dev/null stands in for the device node");
+        "/dev/null".to_string()
+    };
+    refused(
+        &render(&["--out", "n.exr", "--png", &device]),
+        "is not a regular file",
+    );
+    let device_path = dir.join(&device); // an absolute path stays as it is
+    assert!(
+        !std::fs::metadata(&device_path).unwrap().is_file(),
+        "{device} is still a device"
+    );
+
+    // 7. A scene that is a FIFO, or a link to /dev/zero, is refused at once (no hang, no
+    // endless read).
+    let fifo = std::ffi::CString::new(dir.join("fifo.obj").to_str().unwrap()).unwrap();
+    // SAFETY: a NUL-terminated path and a mode.
+    assert_eq!(unsafe { libc::mkfifo(fifo.as_ptr(), 0o600) }, 0);
+    std::os::unix::fs::symlink("/dev/zero", dir.join("zero.obj")).unwrap();
+    for scene in ["fifo.obj", "zero.obj"] {
+        refused(
+            &render(&["--scene", scene, "--out", "f.exr"]),
+            "is not a regular file",
+        );
+    }
+    let left: Vec<String> = common::cli::outputs(dir.path(), &[])
+        .into_iter()
+        .filter(|n| n.starts_with('.') || n.starts_with("f.") || n.starts_with("n."))
+        .collect();
+    assert!(left.is_empty(), "no temporary or partial output: {left:?}");
+}
+
+#[test]
 fn unreadable_and_unwritable_paths_exit_2() {
     refuses(
         "missing",

@@ -33,6 +33,20 @@ pub struct DiffArgs {
 }
 
 pub fn run(args: DiffArgs) -> Result<ExitCode> {
+    if let Some(png) = &args.png {
+        // Not over either image or its report (they are what this command reads).
+        let reports = [
+            args.reference.with_extension("json"),
+            args.test.with_extension("json"),
+        ];
+        let inputs = [
+            args.reference.as_path(),
+            args.test.as_path(),
+            &reports[0],
+            &reports[1],
+        ];
+        hmdist::files::check_output(png, &inputs)?;
+    }
     let reference = exr::read(&args.reference)?;
     let test = exr::read(&args.test)?;
     let (l_diag, scene_scale) = match &args.scene {

@@ -57,7 +57,10 @@ pub fn run(args: MergeArgs) -> Result<()> {
         .json
         .clone()
         .unwrap_or_else(|| args.out.with_extension("json"));
-    let outputs = OutputSet::reserve(&[&args.out, &png, &json])?;
+    // No output may be a part or a part's report.
+    let reports: Vec<std::path::PathBuf> = args.parts.iter().map(|p| p.with_extension("json")).collect();
+    let inputs: Vec<&std::path::Path> = args.parts.iter().chain(&reports).map(|p| p.as_path()).collect();
+    let outputs = OutputSet::reserve(&[&args.out, &png, &json], &inputs)?;
     let parts = args
         .parts
         .iter()

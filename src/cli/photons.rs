@@ -53,6 +53,9 @@ pub fn run(command: PhotonsCommand) -> Result<()> {
         let message = "is what `photons build` writes (--out), not something it reads";
         return Err(Error::invalid("photon_map", message));
     }
+    let scene_files = Scene::files_read(&args.scene);
+    let inputs: Vec<&std::path::Path> = scene_files.iter().map(|p| p.as_path()).collect();
+    hmdist::files::check_output(&args.out, &inputs)?;
     let estimator = PhotonEstimator::new(method, args.params.clone())?;
     let options = args.image.options()?;
     let bar = Bar::new(args.quiet);

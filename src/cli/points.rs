@@ -60,7 +60,10 @@ pub fn run(args: PointsArgs) -> Result<()> {
     )?;
     PointFormat::of(&args.input)?;
     PointFormat::of(&args.output)?;
-    let outputs = OutputSet::reserve(&[&args.output])?;
+    let mut inputs = Scene::files_read(&args.scene);
+    inputs.push(args.input.clone());
+    let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
+    let outputs = OutputSet::reserve(&[&args.output], &inputs)?;
     let bar = Bar::new(args.quiet);
     bar.status("reading");
     let rows = read_rows(&args.input)?;

@@ -107,6 +107,17 @@ fn method_names() -> clap::builder::PossibleValuesParser {
     clap::builder::PossibleValuesParser::new(values)
 }
 
+/// The existing files that method flags name (`--photon-map`): inputs of the render.
+fn flag_files(matches: &clap::ArgMatches) -> Vec<PathBuf> {
+    registry::flag_ids()
+        .iter()
+        .filter_map(|id| matches.get_raw(id))
+        .flatten()
+        .map(PathBuf::from)
+        .filter(|path| path.is_file())
+        .collect()
+}
+
 pub fn run(args: RenderArgs) -> Result<()> {
     let mut aovs = args.aov.clone();
     let mut pictures = vec![];
@@ -137,7 +148,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
     // Fails now, before a long render, if an output cannot be written.
     let mut paths: Vec<&std::path::Path> = vec![&args.out, &png, &json];
     paths.extend(pictures.iter().map(|(_, path)| path.as_path()));
-    let outputs = OutputSet::reserve(&paths)?;
+    // No output may be a file this render reads: the scene's files, a photon map.
+    let mut inputs = Scene::files_read(&args.scene);
+    inputs.extend(flag_files(&args.method_flags.0));
+    let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
+    let outputs = OutputSet::reserve(&paths, &inputs)?;
 
     let bar = Bar::new(args.quiet);
     bar.status("loading");

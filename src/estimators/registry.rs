@@ -158,6 +158,16 @@ fn every_flag() -> Vec<(clap::Arg, Vec<&'static str>)> {
     flags
 }
 
+/// The ids of every method's flags (`photon_map`, `rays`, ...): which of a command's matches
+/// are the methods'.
+#[cfg(feature = "cli")]
+pub fn flag_ids() -> Vec<String> {
+    every_flag()
+        .iter()
+        .map(|(arg, _)| arg.get_id().to_string())
+        .collect()
+}
+
 /// `cmd` with every method's flags, each once; a flag's help ends with the methods that read
 /// it. [`MethodEntry::build_from_flags`] takes the matches.
 #[cfg(feature = "cli")]

@@ -61,7 +61,7 @@ pub fn read(path: &Path) -> Result<HmdImage> {
 }
 
 fn read_named(path: &Path, name: &str, only_channel_will_do: bool) -> Result<HmdImage> {
-    let bytes = std::fs::read(path).map_err(|e| HmdError::io(path, "read", e))?;
+    let bytes = crate::files::read_regular(path)?;
     decode_named(&bytes, path, name, only_channel_will_do)
 }
 

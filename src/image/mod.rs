@@ -76,29 +76,32 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
 /// [`OutputSet::reserve`] creates each file's temporary beside it before the work starts, so
 /// an unwritable path fails at once (the error names that path, not the temporary).
 /// [`OutputSet::commit`] fills the temporaries and renames them into place; if any step fails
-/// it removes every temporary and every output already renamed, so a failure never leaves part
-/// of the set (an older file of the same name is then gone too). Dropped without a commit,
-/// it removes its temporaries.
+/// it removes every temporary and puts back what each path held before (an older file, or
+/// nothing), so a failure leaves the folder as it was. Dropped without a commit, it removes
+/// its temporaries. No output may be a file the command reads, a directory or a device
+/// ([`crate::files::check_output`]).
 pub struct OutputSet {
     /// (destination, temporary), in the order given.
     files: Vec<(PathBuf, PathBuf)>,
 }
 
 impl OutputSet {
-    /// Creates the temporary of each of `paths`: a path named twice, a directory or a file that
-    /// cannot be created is an error.
-    pub fn reserve(paths: &[&Path]) -> Result<OutputSet> {
+    /// Creates the temporary of each of `paths`: a path named twice, one of `inputs` (the
+    /// files the command reads, by any name), a directory, a device or a file that cannot be
+    /// created is an error.
+    pub fn reserve(paths: &[&Path], inputs: &[&Path]) -> Result<OutputSet> {
         let mut set = OutputSet { files: vec![] };
         for (i, &path) in paths.iter().enumerate() {
-            if paths[..i].contains(&path) {
+            if paths[..i]
+                .iter()
+                .any(|&p| p == path || crate::files::same_file(p, path))
+            {
                 return Err(Error::file(
                     path,
                     "is named for two outputs: each needs its own file",
                 ));
             }
-            if path.is_dir() {
-                return Err(Error::file(path, "is a directory, not a file name"));
-            }
+            crate::files::check_output(path, inputs)?;
             let temp = temporary(path)?;
             std::fs::File::create(&temp).map_err(|e| Error::io(path, "write", e))?;
             set.files.push((path.to_path_buf(), temp));
@@ -110,28 +113,69 @@ impl OutputSet {
     pub fn commit(mut self, contents: &[&[u8]]) -> Result<()> {
         assert_eq!(contents.len(), self.files.len(), "one content per output");
         let files = std::mem::take(&mut self.files);
-        let result = write_all(&files, contents);
-        if result.is_err() {
-            for (path, temp) in &files {
-                let _ = std::fs::remove_file(temp);
-                let _ = std::fs::remove_file(path);
+        let mut renamed = vec![];
+        let result = write_all(&files, contents, &mut renamed);
+        for (path, temp) in &files {
+            let _ = std::fs::remove_file(temp);
+            if result.is_err() && !renamed.iter().any(|(p, _)| p == path) {
+                // Not renamed over: the path holds what it held before; an older file's link
+                // made for its restoring is no longer needed.
+                let _ = std::fs::remove_file(earlier(path));
+            }
+        }
+        for (path, had_file) in renamed {
+            let keep = earlier(&path);
+            match (&result, had_file) {
+                (Ok(()), true) => drop(std::fs::remove_file(&keep)),
+                (Err(_), true) => drop(std::fs::rename(&keep, &path)),
+                (Err(_), false) => drop(std::fs::remove_file(&path)),
+                (Ok(()), false) => {}
             }
         }
         result
     }
 }
 
+/// Where the file `path` held before a commit is kept (a hard link) until the commit is
+/// done: put back if it fails.
+fn earlier(path: &Path) -> PathBuf {
+    let mut name = temporary(path)
+        .unwrap_or_else(|_| path.to_path_buf())
+        .into_os_string();
+    name.push(".earlier");
+    PathBuf::from(name)
+}
+
 /// Fills every temporary, then (unless an interruption was requested meanwhile) renames
-/// every one into place.
-fn write_all(files: &[(PathBuf, PathBuf)], contents: &[&[u8]]) -> Result<()> {
+/// every one into place, first keeping a link to the file each path held (`renamed` gets
+/// each path renamed over, and whether it held a file).
+fn write_all(
+    files: &[(PathBuf, PathBuf)],
+    contents: &[&[u8]],
+    renamed: &mut Vec<(PathBuf, bool)>,
+) -> Result<()> {
     for ((path, temp), bytes) in files.iter().zip(contents) {
         std::fs::File::create(temp)
             .and_then(|mut f| f.write_all(bytes).and_then(|_| f.sync_all()))
             .map_err(|e| Error::io(path, "write", e))?;
     }
     crate::interrupt::check()?;
-    for (path, temp) in files {
+    let mut had = vec![];
+    for (path, _) in files {
+        let keep = earlier(path);
+        let _ = std::fs::remove_file(&keep);
+        // A file or a link is kept (on anything else there, the rename fails).
+        let had_file =
+            std::fs::symlink_metadata(path).is_ok_and(|m| m.is_file() || m.file_type().is_symlink());
+        if had_file && std::fs::hard_link(path, &keep).is_err() {
+            // A file system without hard links: a copy keeps it as well.
+            std::fs::copy(path, &keep).map_err(|e| Error::io(path, "keep a copy of", e))?;
+        }
+        had.push(had_file);
+    }
+    for ((path, temp), had_file) in files.iter().zip(had) {
         std::fs::rename(temp, path).map_err(|e| Error::io(path, "write", e))?;
+        renamed.push((path.clone(), had_file));
     }
     Ok(())
 }
@@ -169,7 +213,7 @@ mod tests {
     fn a_set_is_written_whole() {
         let dir = folder("whole");
         let (a, b) = (dir.join("a.exr"), dir.join("a.json"));
-        OutputSet::reserve(&[&a, &b])
+        OutputSet::reserve(&[&a, &b], &[])
             .unwrap()
             .commit(&[b"exr", b"json"])
             .unwrap();
@@ -182,7 +226,7 @@ mod tests {
     fn an_unwritable_path_is_refused_at_reservation_by_its_own_name() {
         let dir = folder("reserve");
         let (exr, json) = (dir.join("hmd.exr"), dir.join("no/such/folder/hmd.json"));
-        let e = OutputSet::reserve(&[&exr, &json])
+        let e = OutputSet::reserve(&[&exr, &json], &[])
             .err()
             .expect("refused")
             .to_string();
@@ -197,12 +241,39 @@ mod tests {
     }
 
     #[test]
+    fn a_failed_commit_puts_back_the_files_it_had_replaced() {
+        // Old hmd.exr and hmd.png exist; the JSON's destination turns into a folder after the
+        // reservation, so its rename fails after the EXR's and the PNG's have succeeded.
+        let dir = folder("restore");
+        let (exr, png, json) = (dir.join("hmd.exr"), dir.join("hmd.png"), dir.join("hmd.json"));
+        std::fs::write(&exr, b"old exr").unwrap();
+        std::fs::write(&png, b"old png").unwrap();
+        let set = OutputSet::reserve(&[&exr, &png, &json], &[]).unwrap();
+        std::fs::create_dir(&json).unwrap();
+        assert!(set.commit(&[b"exr", b"png", b"json"]).is_err());
+        assert_eq!(
+            entries(&dir),
+            ["hmd.exr", "hmd.json", "hmd.png"],
+            "nothing else left"
+        );
+        assert_eq!(std::fs::read(&exr).unwrap(), b"old exr");
+        assert_eq!(std::fs::read(&png).unwrap(), b"old png");
+        // And a commit that succeeds leaves no kept copy behind.
+        std::fs::remove_dir(&json).unwrap();
+        let set = OutputSet::reserve(&[&exr, &png, &json], &[]).unwrap();
+        set.commit(&[b"exr", b"png", b"json"]).unwrap();
+        assert_eq!(entries(&dir), ["hmd.exr", "hmd.json", "hmd.png"]);
+        assert_eq!(std::fs::read(&exr).unwrap(), b"exr");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
     fn a_failure_after_the_first_file_is_in_place_leaves_none_of_the_set() {
         // The PNG's destination turns into a folder after the reservation: its rename fails
         // after the EXR's has succeeded.
         let dir = folder("commit");
         let (exr, png, json) = (dir.join("hmd.exr"), dir.join("hmd.png"), dir.join("hmd.json"));
-        let set = OutputSet::reserve(&[&exr, &png, &json]).unwrap();
+        let set = OutputSet::reserve(&[&exr, &png, &json], &[]).unwrap();
         std::fs::create_dir(&png).unwrap();
         std::fs::write(png.join("keep"), b"").unwrap();
         let e = set

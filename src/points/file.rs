@@ -35,7 +35,7 @@ impl PointFormat {
 /// The rows of the point file at `path`.
 pub fn read_rows(path: &Path) -> Result<Vec<[f32; 6]>> {
     PointFormat::of(path)?;
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, "read", e))?;
+    let bytes = crate::files::read_regular(path)?;
     parse_rows(path, &bytes)
 }
 

@@ -35,6 +35,16 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// Every file [`Scene::load`] of `name_or_path` reads: none for a built-in scene; the file
+    /// and, for a TOML scene, its meshes. Outputs are checked against them
+    /// ([`crate::files::check_output`]).
+    pub fn files_read(name_or_path: &str) -> Vec<std::path::PathBuf> {
+        if procedural::BUILTIN_NAMES.contains(&name_or_path) {
+            return vec![];
+        }
+        load::files_read(Path::new(name_or_path))
+    }
+
     /// Loads a scene by built-in name (`cube`, `hall`, `sphere`, `slab`, `dome`) or file path.
     /// The geometry and camera are validated: the result can be rendered.
     pub fn load(name_or_path: &str) -> Result<Scene> {

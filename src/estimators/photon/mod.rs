@@ -152,7 +152,7 @@ impl PhotonEstimator {
         };
         match map_file {
             Some(path) => {
-                let bytes = std::fs::read(&path).map_err(|e| Error::io(&path, "read", e))?;
+                let bytes = crate::files::read_regular(&path)?;
                 estimator.with_map_file(&bytes, &path)
             }
             None => Ok(estimator),

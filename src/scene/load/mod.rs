@@ -127,7 +127,17 @@ fn file_name(path: &Path) -> String {
 
 /// Reads the whole file, with the error phrased for a person.
 fn read_bytes(path: &Path) -> Result<Vec<u8>> {
-    std::fs::read(path).map_err(|e| Error::io(path, "read", e))
+    crate::files::read_regular(path)
+}
+
+/// Every file that loading the scene file at `path` reads: the file, and a TOML scene's
+/// meshes (as far as the file can be read; a file that cannot fails its load anyway).
+pub fn files_read(path: &Path) -> Vec<std::path::PathBuf> {
+    let mut files = vec![path.to_path_buf()];
+    if let (Ok(Format::SceneToml), Ok(bytes)) = (format_of(path), read_bytes(path)) {
+        files.extend(toml::mesh_paths(path, &bytes));
+    }
+    files
 }
 
 /// Turns a geometry error ("the scene has no triangles") into one that names the file.

@@ -75,6 +75,18 @@ struct DisplayEntry {
     scale: f32,
 }
 
+/// The mesh files the TOML scene at `path` (bytes `bytes`) names, resolved beside it; none
+/// where it does not parse.
+pub(super) fn mesh_paths(path: &Path, bytes: &[u8]) -> Vec<std::path::PathBuf> {
+    let directory = path.parent().unwrap_or(Path::new(""));
+    let parsed = std::str::from_utf8(bytes)
+        .ok()
+        .and_then(|text| ::toml::from_str::<SceneToml>(text).ok());
+    parsed.map_or(vec![], |d| {
+        d.mesh.iter().map(|e| directory.join(&e.get_ref().path)).collect()
+    })
+}
+
 /// Loads the scene described by the TOML file at `path`, whose bytes are `bytes`, with its
 /// meshes.
 pub(super) fn load_scene(path: &Path, bytes: &[u8]) -> Result<Scene> {
