@@ -67,6 +67,27 @@ pub fn check_output(output: &Path, inputs: &[&Path]) -> Result<()> {
     }
 }
 
+/// Refuses an output whose extension names another format than the one written into it
+/// (`--out a.png` for an EXR): a file that lies about its format breaks whatever opens it
+/// next. No extension, or one that names no data format, is left to the user.
+pub fn check_extension(path: &Path, format: &str) -> Result<()> {
+    const FORMATS: [&str; 16] = [
+        "exr", "png", "json", "jpg", "jpeg", "tif", "tiff", "bmp", "hdr", "npy", "csv", "obj", "ply", "gltf",
+        "glb", "toml",
+    ];
+    let extension = path.extension().map(|e| e.to_string_lossy().to_lowercase());
+    match extension {
+        Some(e) if e != format && FORMATS.contains(&e.as_str()) => Err(Error::file(
+            path,
+            format!(
+                "is named .{e} but would hold {}: name it .{format}",
+                format.to_uppercase()
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -106,6 +127,15 @@ mod tests {
             .to_string()
             .contains("not a regular file"));
         assert_eq!(read_regular(&scene).unwrap(), b"v 0 0 0\n");
+        assert!(check_extension(Path::new("a.png"), "exr")
+            .unwrap_err()
+            .to_string()
+            .contains("name it .exr"));
+        assert!(check_extension(Path::new("a.EXR"), "exr").is_ok());
+        assert!(
+            check_extension(Path::new("a.hmd"), "exr").is_ok(),
+            "not a format's name: the user's choice"
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

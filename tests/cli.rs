@@ -55,6 +55,26 @@ fn flags_that_cannot_work_are_refused_before_anything_is_made() {
         ],
         "--ao-radius is read only by the ao AOV",
     );
+    // An output named for another format than it holds.
+    refuses(
+        "exr-as-png",
+        &[],
+        &render_args(&["--out", "a.png", "--png", "b.png"]),
+        "a.png: is named .png but would hold EXR",
+    );
+    refuses(
+        "png-as-jpg",
+        &[],
+        &render_args(&["--png", "a.jpg"]),
+        "a.jpg: is named .jpg but would hold PNG",
+    );
+    // Coordinates float32 geometry cannot hold are named as such, not as a camera problem.
+    refuses(
+        "huge-coordinates",
+        &[("big.obj", b"v 0 0 0\nv 1e30 0 0\nv 0 1e30 0\nf 1 2 3\n")],
+        &render_args(&["--scene", "big.obj"]),
+        "too far out for float32 geometry",
+    );
     // A run refused for its flags creates no output folder.
     refuses(
         "experiment-size0",

@@ -46,6 +46,7 @@ pub fn run(args: DiffArgs) -> Result<ExitCode> {
             &reports[1],
         ];
         hmdist::files::check_output(png, &inputs)?;
+        hmdist::files::check_extension(png, "png")?;
     }
     let reference = exr::read(&args.reference)?;
     let test = exr::read(&args.test)?;

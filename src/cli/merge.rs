@@ -61,6 +61,10 @@ pub fn run(args: MergeArgs) -> Result<()> {
     let reports: Vec<std::path::PathBuf> = args.parts.iter().map(|p| p.with_extension("json")).collect();
     let inputs: Vec<&std::path::Path> = args.parts.iter().chain(&reports).map(|p| p.as_path()).collect();
     let outputs = OutputSet::reserve(&[&args.out, &png, &json], &inputs)?;
+    // After the reservation: a path named twice or an input is the first thing to say.
+    for (path, format) in [(&args.out, "exr"), (&png, "png"), (&json, "json")] {
+        hmdist::files::check_extension(path, format)?;
+    }
     let parts = args
         .parts
         .iter()

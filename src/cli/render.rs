@@ -153,6 +153,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
     inputs.extend(flag_files(&args.method_flags.0));
     let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
     let outputs = OutputSet::reserve(&paths, &inputs)?;
+    // After the reservation: a path named twice or an input is the first thing to say.
+    for (path, format) in [(&args.out, "exr"), (&png, "png"), (&json, "json")] {
+        hmdist::files::check_extension(path, format)?;
+    }
+    for (_, path) in &pictures {
+        hmdist::files::check_extension(path, "png")?;
+    }
 
     let bar = Bar::new(args.quiet);
     bar.status("loading");

@@ -114,8 +114,11 @@ impl Mesh {
     }
 
     /// Checks what the renderer relies on: at least one triangle, every index in range, every
-    /// used vertex finite. The message names the first offender.
+    /// used vertex finite and within ±10¹⁸ (float32 geometry). The message names the first
+    /// offender.
     pub fn validate(&self) -> Result<()> {
+        /// Beyond this a squared distance or a cross product leaves float32's range (3.4e38).
+        const MAX_COORDINATE: f32 = 1e18;
         if self.indices.is_empty() {
             return Err(Error::scene("the scene has no triangles"));
         }
@@ -143,6 +146,17 @@ impl Mesh {
         {
             return Err(Error::scene(format!(
                 "vertex {v} is not finite: ({}, {}, {})",
+                p.x, p.y, p.z
+            )));
+        }
+        if let Some((v, p)) = self
+            .positions
+            .iter()
+            .enumerate()
+            .find(|&(v, p)| used[v] && p.abs().max_element() > MAX_COORDINATE)
+        {
+            return Err(Error::scene(format!(
+                "vertex {v} at ({:e}, {:e}, {:e}) is too far out for float32 geometry: coordinates must stay within ±{MAX_COORDINATE:e} (scale the model down)",
                 p.x, p.y, p.z
             )));
         }
