@@ -187,4 +187,23 @@ impl Shard {
     pub fn has_row(&self, row: u32) -> bool {
         row % self.count == self.index
     }
+
+    /// A hash of this shard's rows of each of `channels` (images `width` pixels wide: H, then
+    /// the AOVs), their bits in order: what a part's report records and `merge` checks its
+    /// EXR against.
+    pub fn rows_hash(&self, width: u32, channels: &[&[f32]]) -> String {
+        let width = width as usize;
+        let mut bytes = vec![];
+        for data in channels {
+            let rows = data.len() / width.max(1);
+            for row in (0..rows).filter(|&r| self.has_row(r as u32)) {
+                bytes.extend(
+                    data[row * width..(row + 1) * width]
+                        .iter()
+                        .flat_map(|v| v.to_bits().to_le_bytes()),
+                );
+            }
+        }
+        format!("{:016x}", crate::scene::stable_hash(&bytes))
+    }
 }

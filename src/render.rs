@@ -186,13 +186,26 @@ fn render_in_pool(
                         bvh,
                         &estimate.details,
                     )),
+                    rows_hash: None,
                 }),
                 shards: None,
                 parameters: estimator.parameters(),
                 details: estimate.details,
             };
+            let image = HmdImage::new(options.width, options.height, estimate.hmd);
+            let mut report = report;
+            if let Some(part) = report.shard.as_mut() {
+                let shard = crate::options::Shard {
+                    index: part.index,
+                    count: part.count,
+                };
+                let channels: Vec<&[f32]> = std::iter::once(&image.data[..])
+                    .chain(estimate.aovs.iter().map(|a| &a.data[..]))
+                    .collect();
+                part.rows_hash = Some(shard.rows_hash(image.width, &channels));
+            }
             Rendered {
-                image: HmdImage::new(options.width, options.height, estimate.hmd),
+                image,
                 aovs: estimate.aovs,
                 report,
             }

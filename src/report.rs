@@ -134,6 +134,11 @@ pub struct ShardReport {
     /// added (`merge` then compares fingerprints alone).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub key: Option<RenderKey>,
+    /// A hash of the shard's own rows of H and its AOVs ([`crate::options::Shard::rows_hash`]): `merge`
+    /// checks each part's EXR against it, so an EXR swapped for another render's, another
+    /// shard's or an edited one is refused. Absent from reports written before it was added.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub rows_hash: Option<String>,
 }
 
 /// Everything that determines a render's pixels, and nothing that does not (threads,

@@ -65,6 +65,26 @@ pub fn merge(parts: Vec<Part>) -> Result<Rendered> {
         )));
     }
     let parts: Vec<Part> = slots.into_iter().flatten().collect();
+    for (index, part) in parts.iter().enumerate() {
+        let shard = Shard::new(index as u32, reference.count)?;
+        let r = &part.report;
+        let what = format!("shard {index}/{}'s EXR", reference.count);
+        if (part.image.width, part.image.height) != (r.width, r.height) {
+            return Err(Error::parameter(format!(
+                "{what} is {}x{}, its report says {}x{}: the EXR is not the image its JSON describes",
+                part.image.width, part.image.height, r.width, r.height
+            )));
+        }
+        let expected = r.shard.as_ref().and_then(|s| s.rows_hash.as_deref());
+        let channels: Vec<&[f32]> = std::iter::once(&part.image.data[..])
+            .chain(part.aovs.iter().map(|a| &a.data[..]))
+            .collect();
+        if expected.is_some_and(|h| h != shard.rows_hash(part.image.width, &channels)) {
+            return Err(Error::parameter(format!(
+                "{what} is not the image its JSON describes (its rows hash differently): was it replaced, swapped or edited?"
+            )));
+        }
+    }
     let (width, height) = (parts[0].image.width, parts[0].image.height);
     let mut image = parts[0].image.clone();
     let mut aovs = parts[0].aovs.clone();
@@ -195,6 +215,12 @@ fn not_one_render(a: &ShardReport, b: &ShardReport) -> Option<String> {
         ));
     }
     let differences = match (&a.key, &b.key) {
+        // The fingerprint is compared too: it goes into the merged report.
+        (Some(ka), Some(kb)) if a.fingerprint == b.fingerprint => ka.differences(kb),
+        (Some(ka), Some(kb)) if ka == kb => vec![format!(
+            "fingerprint ({} against {}), though their keys agree: a report was edited",
+            a.fingerprint, b.fingerprint
+        )],
         (Some(ka), Some(kb)) => ka.differences(kb),
         _ if a.fingerprint == b.fingerprint => vec![],
         _ => vec![format!(

@@ -225,6 +225,74 @@ fn merge_refuses_a_missing_a_repeated_and_a_foreign_part_and_writes_nothing() {
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--shard"));
 }
 
+/// A part's EXR must be the image its JSON describes: another shard's, another render's or
+/// an edited EXR beside a valid JSON is refused, and so is an edited fingerprint.
+#[test]
+fn merge_refuses_a_part_whose_exr_is_not_the_image_its_json_describes() {
+    let dir = Scratch::new("shards-swapped");
+    whole_and_shards(&dir, &["--size", "16x9", "--rays", "4"]);
+    let render = |extra: &[&str]| {
+        let mut args = vec!["render", "--quiet", "--rays", "4"];
+        args.extend_from_slice(extra);
+        hmdist_ok(dir.path(), &args);
+    };
+    render(&[
+        "--size",
+        "16x9",
+        "--seed",
+        "9",
+        "--shard",
+        "1/4",
+        "--out",
+        "seed9.exr",
+    ]);
+    render(&["--size", "16x10", "--shard", "1/4", "--out", "tall.exr"]);
+    let merge = || {
+        hmdist(
+            dir.path(),
+            &[
+                "merge",
+                "out.exr",
+                "part0.exr",
+                "part1.exr",
+                "part2.exr",
+                "part3.exr",
+            ],
+        )
+    };
+    let (exr, json) = (bytes(&dir, "part1.exr"), bytes(&dir, "part1.json"));
+    let refused = |message: &str| {
+        let out = merge();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{message}: {stderr}");
+        assert!(stderr.contains(message), "{message}: {stderr}");
+        assert!(!dir.join("out.exr").exists() && !dir.join("out.json").exists());
+    };
+    for (other, message) in [
+        ("part0.exr", "shard 1/4's EXR is not the image its JSON describes"),
+        ("seed9.exr", "shard 1/4's EXR is not the image its JSON describes"),
+        ("tall.exr", "shard 1/4's EXR is 16x10, its report says 16x9"),
+    ] {
+        std::fs::copy(dir.join(other), dir.join("part1.exr")).unwrap();
+        refused(message);
+    }
+    std::fs::write(dir.join("part1.exr"), &exr).unwrap();
+    let edited = String::from_utf8(json.clone()).unwrap();
+    let fingerprint = serde_json::from_str::<serde_json::Value>(&edited).unwrap()["shard"]["fingerprint"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    std::fs::write(
+        dir.join("part1.json"),
+        edited.replace(&fingerprint, "0123456789abcdef"),
+    )
+    .unwrap();
+    refused("a report was edited");
+    // The control: the parts as rendered merge.
+    std::fs::write(dir.join("part1.json"), &json).unwrap();
+    assert!(merge().status.success());
+}
+
 /// Parts that differ only where the old fingerprint did not look (the `ao` radius, the
 /// backend) are not one image: merge refuses them and names the field.
 #[test]
