@@ -485,4 +485,16 @@ fn a_photon_map_built_once_gives_every_shard_the_one_machine_pixels() {
     refused(&["--photon-map", "short.map"], "short.map: is truncated");
     dir.write("junk.map", b"not a map at all");
     refused(&["--photon-map", "junk.map"], "is not an hmdist photon map");
+    // Bytes changed inside the map's columns, its length intact (issue #51: such a map
+    // rendered a different image with exit 0).
+    let mut damaged = map.clone();
+    let middle = damaged.len() / 2;
+    for (i, b) in damaged.iter_mut().enumerate().skip(middle).step_by(7).take(200) {
+        *b ^= (i % 251) as u8 | 1;
+    }
+    dir.write("damaged.map", &damaged);
+    refused(
+        &["--photon-map", "damaged.map"],
+        "damaged.map: is damaged: its checksum does not match",
+    );
 }

@@ -1,7 +1,8 @@
-//! The photon map file (`hmdist photons build`, `render --photon-map`): `HMDPMAP1`, a header
-//! saying which render the map belongs to and what tracing it cost, then the tree and every
-//! column, little-endian. Read back with every length checked: a truncated or foreign file is
-//! an error that names the problem, never a panic.
+//! The photon map file (`hmdist photons build`, `render --photon-map`): `HMDPMAP2`, a header
+//! saying which render the map belongs to and what tracing it cost, the tree and every
+//! column, little-endian, and a checksum of all of it. Read back with every length checked
+//! and the checksum compared: a truncated, foreign or damaged file is an error that names the
+//! problem, never a panic and never a different image.
 
 use super::{Payloads, PhotonMap, PhotonMethod, LEAF};
 
@@ -24,12 +25,17 @@ pub struct MapHeader {
     pub escaped_rays: u64,
 }
 
-/// The first bytes of a photon map file, with its format's version.
-const MAGIC: &[u8; 8] = b"HMDPMAP1";
+/// The first bytes of a photon map file, with its format's version (2: with a checksum).
+const MAGIC: &[u8; 8] = b"HMDPMAP2";
+
+/// The checksum a map file ends with: 64-bit FNV-1a of every byte before it.
+fn checksum(bytes: &[u8]) -> [u8; 8] {
+    crate::scene::stable_hash(bytes).to_le_bytes()
+}
 
 impl PhotonMap {
-    /// The map as a file: `MAGIC` (`HMDPMAP1`), the header, then the tree and every column,
-    /// little-endian.
+    /// The map as a file: `MAGIC` (`HMDPMAP2`), the header, the tree and every column,
+    /// little-endian, then the checksum of all of it.
     pub fn to_bytes(&self, header: &MapHeader) -> Vec<u8> {
         let mut out = MAGIC.to_vec();
         let method = match self.payloads {
@@ -64,15 +70,18 @@ impl PhotonMap {
                 }
             }
         }
+        let sum = checksum(&out);
+        out.extend(sum);
         out
     }
 
-    /// A map from the bytes of [`PhotonMap::to_bytes`], checked: magic, version, method and
-    /// every length; the message says what is wrong.
+    /// A map from the bytes of [`PhotonMap::to_bytes`], checked: magic, version, method,
+    /// every length and the checksum; the message says what is wrong.
     pub fn from_bytes(
-        bytes: &[u8],
+        file: &[u8],
         method: PhotonMethod,
     ) -> std::result::Result<(PhotonMap, MapHeader), String> {
+        let (bytes, sum) = file.split_at(file.len().saturating_sub(8));
         let mut r = Reader { bytes, at: 0 };
         if r.take(8)? != MAGIC {
             return Err("is not an hmdist photon map (version 1)".into());
@@ -118,6 +127,9 @@ impl PhotonMap {
         };
         if r.at != bytes.len() {
             return Err("has bytes after its end".into());
+        }
+        if sum != checksum(bytes) {
+            return Err("is damaged: its checksum does not match its contents (build it again with hmdist photons build)".into());
         }
         let header = MapHeader {
             fingerprint,
