@@ -223,6 +223,25 @@ fn no_output_lands_on_an_input_a_device_or_what_a_failed_run_would_replace() {
 }
 
 #[test]
+fn a_temporary_a_killed_run_left_is_removed_by_the_next_run_that_writes_there() {
+    let dir = Scratch::new("cli-stale-temporaries");
+    let args = [
+        "render", "--quiet", "--size", "8x8", "--rays", "4", "--out", "o.exr",
+    ];
+    // A temporary of a run that no longer exists is removed by the next run that writes the
+    // same output; one of a live process (this test's) is left alone.
+    let mut gone = std::process::Command::new("true").spawn().unwrap();
+    gone.wait().unwrap();
+    let stale = dir.join(&format!(".o.exr.{}.tmp", gone.id()));
+    let live = dir.join(&format!(".o.png.{}.tmp", std::process::id()));
+    std::fs::write(&stale, b"left by a killed run").unwrap();
+    std::fs::write(&live, b"being written").unwrap();
+    common::cli::hmdist_ok(dir.path(), &args);
+    assert!(!stale.exists(), "the dead run's temporary is removed");
+    assert!(live.exists(), "a live run's temporary is kept");
+}
+
+#[test]
 fn unreadable_and_unwritable_paths_exit_2() {
     refuses(
         "missing",

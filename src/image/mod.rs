@@ -91,6 +91,9 @@ impl OutputSet {
     /// created is an error.
     pub fn reserve(paths: &[&Path], inputs: &[&Path]) -> Result<OutputSet> {
         let mut set = OutputSet { files: vec![] };
+        for &path in paths {
+            remove_stale_temporaries(path);
+        }
         for (i, &path) in paths.iter().enumerate() {
             if paths[..i]
                 .iter()
@@ -109,10 +112,13 @@ impl OutputSet {
         Ok(set)
     }
 
-    /// Writes `contents[i]` to the `i`-th path: every file, or (on error) none.
+    /// Writes `contents[i]` to the `i`-th path: every file, or (on error) none. Two commits
+    /// into one folder at once take turns (a lock on the folder), so two runs writing the same
+    /// outputs leave one run's set, never a mix.
     pub fn commit(mut self, contents: &[&[u8]]) -> Result<()> {
         assert_eq!(contents.len(), self.files.len(), "one content per output");
         let files = std::mem::take(&mut self.files);
+        let _turn = files.first().map(|(path, _)| FolderLock::take(path));
         let mut renamed = vec![];
         let result = write_all(&files, contents, &mut renamed);
         for (path, temp) in &files {
@@ -133,6 +139,86 @@ impl OutputSet {
             }
         }
         result
+    }
+}
+
+/// An exclusive lock on the folder of a path (flock on the folder itself: no lock file to
+/// leave behind), held while it lives. Where the folder cannot be locked the commit goes on
+/// unlocked.
+struct FolderLock {
+    #[cfg(unix)]
+    _folder: Option<std::fs::File>,
+}
+
+impl FolderLock {
+    fn take(path: &Path) -> FolderLock {
+        #[cfg(unix)]
+        {
+            use std::os::fd::AsRawFd;
+            let dir = match path.parent() {
+                Some(d) if !d.as_os_str().is_empty() => d,
+                _ => Path::new("."),
+            };
+            let folder = std::fs::File::open(dir).ok().filter(|f| {
+                // SAFETY: flock on a descriptor this File owns; released when it is closed.
+                unsafe { libc::flock(f.as_raw_fd(), libc::LOCK_EX) == 0 }
+            });
+            FolderLock { _folder: folder }
+        }
+        #[cfg(not(unix))]
+        {
+            let _ = path;
+            FolderLock {}
+        }
+    }
+}
+
+/// Removes the temporaries (`.NAME.PID.tmp`, and the kept earlier files `.NAME.PID.tmp.earlier`)
+/// that runs which no longer exist left beside `path` (a run killed by SIGKILL, or aborted,
+/// cannot remove its own).
+fn remove_stale_temporaries(path: &Path) {
+    let (Some(name), dir) = (path.file_name(), path.parent()) else {
+        return;
+    };
+    let dir = match dir {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let prefix = format!(".{}.", name.to_string_lossy());
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let file = entry.file_name().to_string_lossy().into_owned();
+        let Some(rest) = file.strip_prefix(&prefix) else {
+            continue;
+        };
+        let pid = rest
+            .strip_suffix(".tmp")
+            .or_else(|| rest.strip_suffix(".tmp.earlier"));
+        if let Some(pid) = pid.and_then(|p| p.parse::<u32>().ok()) {
+            if pid != std::process::id() && !process_alive(pid) {
+                let _ = std::fs::remove_file(entry.path());
+            }
+        }
+    }
+}
+
+/// Whether a process `pid` exists (where that cannot be told: assumed alive, nothing removed).
+fn process_alive(pid: u32) -> bool {
+    #[cfg(unix)]
+    {
+        let Ok(pid) = libc::pid_t::try_from(pid) else {
+            return true;
+        };
+        // SAFETY: signal 0 sends nothing; it only checks that the process exists.
+        let alive = unsafe { libc::kill(pid, 0) } == 0;
+        alive || std::io::Error::last_os_error().raw_os_error() != Some(libc::ESRCH)
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = pid;
+        true
     }
 }
 
@@ -264,6 +350,26 @@ mod tests {
         set.commit(&[b"exr", b"png", b"json"]).unwrap();
         assert_eq!(entries(&dir), ["hmd.exr", "hmd.json", "hmd.png"]);
         assert_eq!(std::fs::read(&exr).unwrap(), b"exr");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_commit_waits_while_another_holds_the_folder() {
+        // Two runs committing the same outputs take turns: while one holds the folder's lock
+        // the other's files do not move, so the set on disk is one run's.
+        let dir = folder("turns");
+        let (exr, json) = (dir.join("o.exr"), dir.join("o.json"));
+        let set = OutputSet::reserve(&[&exr, &json], &[]).unwrap();
+        let held = FolderLock::take(&exr);
+        let committing = std::thread::spawn(move || set.commit(&[b"exr", b"json"]));
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        assert!(
+            !exr.exists() && !json.exists(),
+            "nothing renamed while the folder is held"
+        );
+        drop(held);
+        committing.join().unwrap().unwrap();
+        assert_eq!(std::fs::read(&json).unwrap(), b"json");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
