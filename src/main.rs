@@ -55,3 +55,84 @@ fn quiet_headless_vulkan() -> Option<std::path::PathBuf> {
     }
     None
 }
+
+/// The system allocator, except that an allocation it cannot make ends the process with the
+/// CLI's status for an error (2) and a one-line message, instead of Rust's abort (134) with a
+/// backtrace. Under an address-space limit (`ulimit -v`) or a full machine that is where a
+/// request the memory checks did not foresee ends. Outputs are renamed into place only at
+/// the end, so none is half-written, and the run's temporaries are removed on the way out
+/// (where they cannot be, by the next run that writes the same outputs).
+struct ExitOnOutOfMemory;
+
+// SAFETY: every call is passed to the system allocator unchanged; only a null result is
+// turned into an exit.
+unsafe impl std::alloc::GlobalAlloc for ExitOnOutOfMemory {
+    unsafe fn alloc(&self, layout: std::alloc::Layout) -> *mut u8 {
+        // SAFETY: the caller's contract, passed on.
+        checked(unsafe { std::alloc::System.alloc(layout) }, layout.size())
+    }
+
+    unsafe fn alloc_zeroed(&self, layout: std::alloc::Layout) -> *mut u8 {
+        // SAFETY: the caller's contract, passed on.
+        checked(unsafe { std::alloc::System.alloc_zeroed(layout) }, layout.size())
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: std::alloc::Layout, new_size: usize) -> *mut u8 {
+        // SAFETY: the caller's contract, passed on.
+        checked(
+            unsafe { std::alloc::System.realloc(ptr, layout, new_size) },
+            new_size,
+        )
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: std::alloc::Layout) {
+        // SAFETY: the caller's contract, passed on.
+        unsafe { std::alloc::System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: ExitOnOutOfMemory = ExitOnOutOfMemory;
+
+/// `ptr`, unless it is null: then the message and exit status 2, allocating nothing.
+fn checked(ptr: *mut u8, size: usize) -> *mut u8 {
+    if ptr.is_null() && size > 0 {
+        out_of_memory(size);
+    }
+    ptr
+}
+
+fn out_of_memory(size: usize) -> ! {
+    // The size in decimal, on the stack.
+    let mut digits = [0u8; 20];
+    let mut at = digits.len();
+    let mut n = size;
+    loop {
+        at -= 1;
+        digits[at] = b'0' + (n % 10) as u8;
+        n /= 10;
+        if n == 0 {
+            break;
+        }
+    }
+    let parts: [&[u8]; 3] = [
+        b"hmdist: error: out of memory: an allocation of ",
+        &digits[at..],
+        b" bytes failed (the machine's memory, or the address-space limit of ulimit -v, is too small for this request); no output was written\n",
+    ];
+    #[cfg(unix)]
+    // SAFETY: writes of valid buffers to stderr, then an immediate exit that runs nothing else
+    // (no allocation, no destructor, no lock another thread may hold).
+    unsafe {
+        hmdist::image::remove_pending_temporaries();
+        for part in parts {
+            libc::write(2, part.as_ptr().cast(), part.len());
+        }
+        libc::_exit(2)
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = parts;
+        std::process::abort()
+    }
+}

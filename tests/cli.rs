@@ -242,6 +242,59 @@ fn a_temporary_a_killed_run_left_is_removed_by_the_next_run_that_writes_there() 
 }
 
 #[test]
+fn an_allocation_that_fails_under_an_address_space_limit_is_exit_2_with_nothing_left() {
+    // `ulimit -v` of 300 MB and an image whose buffers need about 0.8 GB: the memory check
+    // (machine and cgroups) lets it through, the allocation fails. Before: abort, status 134,
+    // a backtrace and three temporaries left.
+    use std::os::unix::process::CommandExt;
+    let dir = Scratch::new("cli-address-space");
+    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_hmdist"));
+    command
+        .args([
+            "render",
+            "--quiet",
+            "--backend",
+            "cpu",
+            "--size",
+            "4096x4096",
+            "--rays",
+            "1",
+            "--out",
+            "o.exr",
+        ])
+        .current_dir(dir.path());
+    // SAFETY: setrlimit only, between fork and exec.
+    unsafe {
+        command.pre_exec(|| {
+            let limit = libc::rlimit {
+                rlim_cur: 300 << 20,
+                rlim_max: 300 << 20,
+            };
+            match libc::setrlimit(libc::RLIMIT_AS, &limit) {
+                0 => Ok(()),
+                _ => Err(std::io::Error::last_os_error()),
+            }
+        });
+    }
+    let out = command.output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.starts_with("hmdist: error: out of memory: an allocation of"),
+        "{stderr}"
+    );
+    assert!(
+        !stderr.contains("panicked") && !stderr.contains("backtrace"),
+        "{stderr}"
+    );
+    assert_eq!(
+        common::cli::outputs(dir.path(), &[]),
+        Vec::<String>::new(),
+        "no output, no temporary"
+    );
+}
+
+#[test]
 fn unreadable_and_unwritable_paths_exit_2() {
     refuses(
         "missing",

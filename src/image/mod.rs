@@ -107,6 +107,7 @@ impl OutputSet {
             crate::files::check_output(path, inputs)?;
             let temp = temporary(path)?;
             std::fs::File::create(&temp).map_err(|e| Error::io(path, "write", e))?;
+            pending::add(&temp);
             set.files.push((path.to_path_buf(), temp));
         }
         Ok(set)
@@ -118,6 +119,7 @@ impl OutputSet {
     pub fn commit(mut self, contents: &[&[u8]]) -> Result<()> {
         assert_eq!(contents.len(), self.files.len(), "one content per output");
         let files = std::mem::take(&mut self.files);
+        let _forget = Forget(files.iter().map(|(_, temp)| temp.clone()).collect());
         let _turn = files.first().map(|(path, _)| FolderLock::take(path));
         let mut renamed = vec![];
         let result = write_all(&files, contents, &mut renamed);
@@ -270,6 +272,66 @@ impl Drop for OutputSet {
     fn drop(&mut self) {
         for (_, temp) in &self.files {
             let _ = std::fs::remove_file(temp);
+            pending::remove(temp);
+        }
+    }
+}
+
+/// Takes temporaries off [`pending`] when a commit is over, however it ended.
+struct Forget(Vec<PathBuf>);
+
+impl Drop for Forget {
+    fn drop(&mut self) {
+        for temp in &self.0 {
+            pending::remove(temp);
+        }
+    }
+}
+
+/// The temporaries of the output sets reserved and not yet committed, so that a process
+/// ending where no destructor runs (out of memory: the CLI's allocator) can remove them
+/// without allocating ([`remove_pending_temporaries`]).
+mod pending {
+    use std::ffi::CString;
+    use std::path::Path;
+    use std::sync::Mutex;
+
+    pub(super) static PENDING: Mutex<Vec<CString>> = Mutex::new(Vec::new());
+
+    pub(super) fn add(temp: &Path) {
+        #[cfg(unix)]
+        {
+            use std::os::unix::ffi::OsStrExt;
+            if let (Ok(name), Ok(mut list)) = (CString::new(temp.as_os_str().as_bytes()), PENDING.lock()) {
+                list.push(name);
+            }
+        }
+        #[cfg(not(unix))]
+        let _ = temp;
+    }
+
+    pub(super) fn remove(temp: &Path) {
+        #[cfg(unix)]
+        {
+            use std::os::unix::ffi::OsStrExt;
+            if let Ok(mut list) = PENDING.lock() {
+                list.retain(|name| name.as_bytes() != temp.as_os_str().as_bytes());
+            }
+        }
+        #[cfg(not(unix))]
+        let _ = temp;
+    }
+}
+
+/// Removes every temporary of an output set not yet committed, allocating nothing: for a
+/// process about to end where no destructor runs. Skips them where the list is being changed
+/// at that moment (the next run that writes there removes them: they name a dead process).
+pub fn remove_pending_temporaries() {
+    #[cfg(unix)]
+    if let Ok(list) = pending::PENDING.try_lock() {
+        for name in list.iter() {
+            // SAFETY: a NUL-terminated path that the list owns.
+            unsafe { libc::unlink(name.as_ptr()) };
         }
     }
 }
