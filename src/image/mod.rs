@@ -91,9 +91,7 @@ impl OutputSet {
     /// created is an error.
     pub fn reserve(paths: &[&Path], inputs: &[&Path]) -> Result<OutputSet> {
         let mut set = OutputSet { files: vec![] };
-        for &path in paths {
-            remove_stale_temporaries(path);
-        }
+        remove_stale_temporaries(paths);
         for (i, &path) in paths.iter().enumerate() {
             if paths[..i]
                 .iter()
@@ -176,31 +174,41 @@ impl FolderLock {
 }
 
 /// Removes the temporaries (`.NAME.PID.tmp`, and the kept earlier files `.NAME.PID.tmp.earlier`)
-/// that runs which no longer exist left beside `path` (a run killed by SIGKILL, or aborted,
-/// cannot remove its own).
-fn remove_stale_temporaries(path: &Path) {
-    let (Some(name), dir) = (path.file_name(), path.parent()) else {
-        return;
+/// that runs which no longer exist left beside `paths` (a run killed by SIGKILL, or aborted,
+/// cannot remove its own): each folder is listed once.
+fn remove_stale_temporaries(paths: &[&Path]) {
+    let folder = |path: &Path| match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
     };
-    let dir = match dir {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let prefix = format!(".{}.", name.to_string_lossy());
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return;
-    };
-    for entry in entries.flatten() {
-        let file = entry.file_name().to_string_lossy().into_owned();
-        let Some(rest) = file.strip_prefix(&prefix) else {
+    let mut folders: Vec<PathBuf> = paths.iter().map(|p| folder(p)).collect();
+    folders.sort();
+    folders.dedup();
+    for dir in folders {
+        let prefixes: Vec<String> = paths
+            .iter()
+            .filter(|p| folder(p) == dir)
+            .filter_map(|p| p.file_name())
+            .map(|name| format!(".{}.", name.to_string_lossy()))
+            .collect();
+        let Ok(entries) = std::fs::read_dir(&dir) else {
             continue;
         };
-        let pid = rest
-            .strip_suffix(".tmp")
-            .or_else(|| rest.strip_suffix(".tmp.earlier"));
-        if let Some(pid) = pid.and_then(|p| p.parse::<u32>().ok()) {
-            if pid != std::process::id() && !process_alive(pid) {
-                let _ = std::fs::remove_file(entry.path());
+        for entry in entries.flatten() {
+            let file = entry.file_name().to_string_lossy().into_owned();
+            let Some(rest) = prefixes
+                .iter()
+                .find_map(|prefix| file.strip_prefix(prefix.as_str()))
+            else {
+                continue;
+            };
+            let pid = rest
+                .strip_suffix(".tmp")
+                .or_else(|| rest.strip_suffix(".tmp.earlier"));
+            if let Some(pid) = pid.and_then(|p| p.parse::<u32>().ok()) {
+                if pid != std::process::id() && !process_alive(pid) {
+                    let _ = std::fs::remove_file(entry.path());
+                }
             }
         }
     }
