@@ -241,34 +241,27 @@ fn a_temporary_a_killed_run_left_is_removed_by_the_next_run_that_writes_there() 
     assert!(live.exists(), "a live run's temporary is kept");
 }
 
-#[test]
-fn an_allocation_that_fails_under_an_address_space_limit_is_exit_2_with_nothing_left() {
-    // `ulimit -v` of 300 MB and an image whose buffers need about 0.8 GB: the memory check
-    // (machine and cgroups) lets it through, the allocation fails. Before: abort, status 134,
-    // a backtrace and three temporaries left.
+/// `hmdist render --size SIZE --out o.exr` in a fresh folder under an address-space limit
+/// (`ulimit -v`) of `limit` bytes, with `env` set: its output and what it left there.
+fn render_under_address_space_limit(
+    name: &str,
+    size: &str,
+    limit: u64,
+    env: &[(&str, &str)],
+) -> (std::process::Output, Vec<String>) {
     use std::os::unix::process::CommandExt;
-    let dir = Scratch::new("cli-address-space");
+    let dir = Scratch::new(name);
     let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_hmdist"));
     command
-        .args([
-            "render",
-            "--quiet",
-            "--backend",
-            "cpu",
-            "--size",
-            "4096x4096",
-            "--rays",
-            "1",
-            "--out",
-            "o.exr",
-        ])
+        .args(["render", "--quiet", "--backend", "cpu", "--size", size, "--rays", "1", "--out", "o.exr"])
+        .envs(env.iter().copied())
         .current_dir(dir.path());
     // SAFETY: setrlimit only, between fork and exec.
     unsafe {
-        command.pre_exec(|| {
+        command.pre_exec(move || {
             let limit = libc::rlimit {
-                rlim_cur: 300 << 20,
-                rlim_max: 300 << 20,
+                rlim_cur: limit,
+                rlim_max: limit,
             };
             match libc::setrlimit(libc::RLIMIT_AS, &limit) {
                 0 => Ok(()),
@@ -277,6 +270,36 @@ fn an_allocation_that_fails_under_an_address_space_limit_is_exit_2_with_nothing_
         });
     }
     let out = command.output().unwrap();
+    let left = common::cli::outputs(dir.path(), &[]);
+    (out, left)
+}
+
+#[test]
+fn a_request_over_the_address_space_limit_is_refused_before_allocating() {
+    // `ulimit -v` of 1 GB and an 8192² image whose buffers need about 3 GB. Before: the memory
+    // check read only the machine and cgroups, the allocation failed, abort 134.
+    let (out, left) = render_under_address_space_limit("cli-rlimit-refused", "8192x8192", 1 << 30, &[]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("bad parameter: --size 8192x8192 needs about")
+            && stderr.contains("under this process's address-space limit (ulimit -v)"),
+        "{stderr}"
+    );
+    assert_eq!(left, Vec::<String>::new(), "no output, no temporary");
+}
+
+#[test]
+fn an_allocation_that_fails_under_an_address_space_limit_is_exit_2_with_nothing_left() {
+    // `ulimit -v` of 300 MB and an image whose buffers need about 0.8 GB, with the memory
+    // check switched off (HMDIST_NO_MEMORY_CHECK) so that the allocation itself fails. Before:
+    // abort, status 134, a backtrace and three temporaries left.
+    let (out, left) = render_under_address_space_limit(
+        "cli-address-space",
+        "4096x4096",
+        300 << 20,
+        &[("HMDIST_NO_MEMORY_CHECK", "1")],
+    );
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(
@@ -287,11 +310,7 @@ fn an_allocation_that_fails_under_an_address_space_limit_is_exit_2_with_nothing_
         !stderr.contains("panicked") && !stderr.contains("backtrace"),
         "{stderr}"
     );
-    assert_eq!(
-        common::cli::outputs(dir.path(), &[]),
-        Vec::<String>::new(),
-        "no output, no temporary"
-    );
+    assert_eq!(left, Vec::<String>::new(), "no output, no temporary");
 }
 
 #[test]
