@@ -17,8 +17,12 @@ pub struct FDiff {
     pub excluded: usize,
 }
 
-/// `f_diff` of `test` against `reference` for a scene with bounding-box diagonal `l_diag`.
+/// `f_diff` of `test` against `reference` for a scene with bounding-box diagonal `l_diag`
+/// (positive and finite, else an error naming it).
 pub fn f_diff(reference: &HmdImage, test: &HmdImage, l_diag: f32) -> Result<FDiff> {
+    if !(l_diag.is_finite() && l_diag > 0.0) {
+        return Err(Error::invalid("l_diag", format!("must be a positive finite length, not {l_diag}")));
+    }
     if (reference.width, reference.height) != (test.width, test.height) {
         return Err(Error::parameter(format!(
             "images differ in size: {}x{} and {}x{}",
@@ -115,6 +119,11 @@ mod tests {
         let a = image(vec![1.0, 2.0, 3.5, f32::NAN]);
         let d = f_diff(&a, &a, 10.0).unwrap();
         assert_eq!((d.value, d.compared, d.excluded), (0.0, 3, 1));
+        // A diagonal that is no length is refused, not a NaN or infinite f_diff.
+        for l_diag in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            let e = f_diff(&a, &a, l_diag).unwrap_err().to_string();
+            assert!(e.contains("l_diag must be a positive finite length"), "{e}");
+        }
     }
 
     #[test]

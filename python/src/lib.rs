@@ -108,6 +108,11 @@ fn numbers(name: &str, value: &Bound<'_, PyAny>, count: usize) -> PyResult<Vec<f
     Ok(numbers)
 }
 
+/// `v` as the float64 its shortest decimal form reads as (0.3f32 as 0.3, not 0.30000001192…).
+fn shortest(v: f32) -> f64 {
+    v.to_string().parse().unwrap_or(v as f64)
+}
+
 /// A pinhole camera: where it is, what it looks at, and the image it takes.
 #[pyclass(name = "Camera", module = "hmdist._hmdist", from_py_object)]
 #[derive(Clone)]
@@ -156,7 +161,53 @@ impl PyCamera {
                 "fov_y_deg must be in (0, 180), not {fov_y_deg}"
             )));
         }
+        camera
+            .validate()
+            .map_err(|e| value_error(e.to_string().replacen("bad scene: ", "bad camera: ", 1)))?;
         Ok(PyCamera { camera, size })
+    }
+
+    /// Where the camera is.
+    #[getter]
+    fn eye(&self) -> [f64; 3] {
+        self.camera.eye.to_array().map(shortest)
+    }
+
+    /// The point it looks at.
+    #[getter]
+    fn target(&self) -> [f64; 3] {
+        self.camera.target.to_array().map(shortest)
+    }
+
+    /// The world's up direction.
+    #[getter]
+    fn up(&self) -> [f64; 3] {
+        self.camera.up.to_array().map(shortest)
+    }
+
+    /// The full vertical field of view, in degrees.
+    #[getter]
+    fn fov_y_deg(&self) -> f64 {
+        shortest(self.camera.fov_y_deg)
+    }
+
+    /// The image it takes: (width, height).
+    #[getter]
+    fn size(&self) -> (u32, u32) {
+        self.size
+    }
+
+    /// For pickle: the constructor and its arguments.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        let c = slf.borrow();
+        let args = (c.eye(), c.target(), c.up(), c.fov_y_deg(), c.size);
+        Ok((slf.get_type().into_any(), args.into_pyobject(slf.py())?.into_any()))
+    }
+
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other
+            .extract::<PyCamera>()
+            .is_ok_and(|o| o.camera == self.camera && o.size == self.size)
     }
 
     fn __repr__(&self) -> String {
@@ -172,8 +223,9 @@ impl PyCamera {
     }
 }
 
-/// A triangle scene, its camera and light, and its BVH once something casts rays.
-#[pyclass(name = "Scene", module = "hmdist._hmdist")]
+/// A triangle scene, its camera and light, and its BVH once something casts rays. Read-only
+/// once built (`frozen`): any number of threads may render it at once.
+#[pyclass(name = "Scene", module = "hmdist._hmdist", frozen)]
 struct PyScene {
     scene: hmdist::scene::Scene,
     accel: OnceLock<Accel>,
@@ -186,6 +238,18 @@ impl PyScene {
             scene,
             accel: OnceLock::new(),
         })
+    }
+
+    /// The scene as `camera` sees it: itself, or (for another camera) a copy with that camera.
+    fn seen_by(&self, camera: Option<&PyCamera>) -> std::borrow::Cow<'_, hmdist::scene::Scene> {
+        match camera {
+            Some(c) if c.camera != self.scene.camera => {
+                let mut scene = self.scene.clone();
+                scene.camera = c.camera;
+                std::borrow::Cow::Owned(scene)
+            }
+            _ => std::borrow::Cow::Borrowed(&self.scene),
+        }
     }
 
     /// The BVH for `hmd_at` and `cast`, built (without the GIL) at the first call.
@@ -292,7 +356,7 @@ impl PyScene {
     /// dict by name. Parameters as `hmdist render`'s flags (`rays`, `photons`, ...), passed by
     /// the Python wrapper as a dict.
     fn render<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         camera: Option<PyCamera>,
         method: &str,
@@ -309,17 +373,14 @@ impl PyScene {
         }
         let (estimator, mut options) = configure(method, params, &aovs)?;
         options.aovs = aovs;
-        let original = self.scene.camera;
         if let Some(c) = &camera {
-            self.scene.camera = c.camera;
             (options.width, options.height) = c.size;
         }
-        let scene = &self.scene;
+        let scene = self.seen_by(camera.as_ref());
+        let scene = scene.as_ref();
         let reporter: &dyn Progress = if progress { &Stderr } else { &Silent };
         let estimator = estimator.as_ref();
-        let result = interruptible(py, || render(scene, estimator, &options, reporter));
-        self.scene.camera = original;
-        let rendered = result?.map_err(py_error)?;
+        let rendered = interruptible(py, || render(scene, estimator, &options, reporter))?.map_err(py_error)?;
         let (w, h) = (rendered.image.width as usize, rendered.image.height as usize);
         let image = PyArray1::from_vec(py, rendered.image.data).reshape([h, w])?;
         let report = json_to_py(py, &rendered.report.to_json())?;
@@ -337,20 +398,16 @@ impl PyScene {
     /// (facing the camera), point error bounds [n, 3], triangles (int64 [n], -1 for
     /// background; then the other rows are NaN).
     fn primary_hits<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         camera: Option<PyCamera>,
         size: (u32, u32),
     ) -> PyResult<Bound<'py, PyDict>> {
-        let original = self.scene.camera;
         let size = camera.as_ref().map_or(size, |c| c.size);
-        if let Some(c) = &camera {
-            self.scene.camera = c.camera;
-        }
         let accel = self.accel(py)?;
-        let scene = &self.scene;
+        let scene = self.seen_by(camera.as_ref());
+        let scene = scene.as_ref();
         let gbuffer = py.detach(|| hmdist::render::primary_hits(accel, scene, size.0, size.1));
-        self.scene.camera = original;
         let column = |f: &dyn Fn(&hmdist::accel::Hit) -> Vec3| -> Vec<f32> {
             gbuffer
                 .points
@@ -473,6 +530,69 @@ impl PyScene {
             t
         })?;
         Ok(PyArray1::from_vec(py, t))
+    }
+
+    /// For pickle: [`PyScene::from_state`] and the scene's name, vertices (float32 bytes),
+    /// faces (uint32 bytes), camera, light and display scale.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        let py = slf.py();
+        let s = &slf.get().scene;
+        let positions: Vec<u8> = s.mesh.positions.iter().flat_map(|p| p.to_array()).flat_map(f32::to_le_bytes).collect();
+        let indices: Vec<u8> = s.mesh.indices.iter().flatten().flat_map(|i| i.to_le_bytes()).collect();
+        let c = &s.camera;
+        let camera = (c.eye.to_array(), c.target.to_array(), c.up.to_array(), c.fov_y_deg);
+        let light = s
+            .light
+            .map(|l| (l.position.to_array(), l.direction.to_array(), l.cone_half_angle_deg));
+        let args = (
+            s.name.as_str(),
+            pyo3::types::PyBytes::new(py, &positions),
+            pyo3::types::PyBytes::new(py, &indices),
+            camera,
+            light,
+            s.display_scale,
+        );
+        let from_state = slf.get_type().getattr("_from_state")?;
+        Ok((from_state, args.into_pyobject(py)?.into_any()))
+    }
+
+    /// The scene [`PyScene::__reduce__`] described.
+    #[staticmethod]
+    #[allow(clippy::type_complexity)]
+    fn _from_state(
+        name: String,
+        positions: &[u8],
+        indices: &[u8],
+        camera: ([f32; 3], [f32; 3], [f32; 3], f32),
+        light: Option<([f32; 3], [f32; 3], f32)>,
+        display_scale: f32,
+    ) -> PyResult<Self> {
+        let word = |b: &[u8]| -> [u8; 4] { [b[0], b[1], b[2], b[3]] };
+        let floats: Vec<f32> = positions.chunks_exact(4).map(|b| f32::from_le_bytes(word(b))).collect();
+        let ints: Vec<u32> = indices.chunks_exact(4).map(|b| u32::from_le_bytes(word(b))).collect();
+        let mesh = Mesh {
+            positions: floats.chunks_exact(3).map(Vec3::from_slice).collect(),
+            indices: ints.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+        };
+        let (eye, target, up, fov_y_deg) = camera;
+        let camera = Camera {
+            eye: eye.into(),
+            target: target.into(),
+            up: up.into(),
+            fov_y_deg,
+        };
+        let light = light.map(|(position, direction, cone_half_angle_deg)| hmdist::scene::SpotLight {
+            position: position.into(),
+            direction: direction.into(),
+            cone_half_angle_deg,
+        });
+        PyScene::new(hmdist::scene::Scene {
+            name,
+            mesh,
+            camera,
+            light,
+            display_scale,
+        })
     }
 
     fn __repr__(&self) -> String {
@@ -607,5 +727,6 @@ fn _hmdist(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_exr, m)?)?;
     m.add("DeviceError", m.py().get_type::<DeviceError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("BUILTIN_SCENES", hmdist::scene::procedural::BUILTIN_NAMES.to_vec())?;
     Ok(())
 }

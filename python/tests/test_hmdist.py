@@ -1,12 +1,14 @@
 """The Python package against closed forms, the CLI and its own contracts (issue #13)."""
 
 import os
+import pickle
 import signal
 import subprocess
 import sys
 import threading
 import time
 from pathlib import Path
+from typing import Any, Callable, Iterator
 
 import numpy as np
 import pytest
@@ -17,7 +19,7 @@ REPO = Path(__file__).resolve().parents[2]
 CLI = os.environ.get("HMDIST_BIN", str(REPO / "target" / "release" / "hmdist"))
 
 
-def test_slab_floor_gives_three_halves_height_through_hmd_at():
+def test_slab_floor_gives_three_halves_height_through_hmd_at() -> None:
     h = 1.0
     s = hmdist.Scene.builtin("slab")
     points = np.array([[0.3, 0.0, -0.2], [-1.0, 0.0, 2.0]])
@@ -27,7 +29,7 @@ def test_slab_floor_gives_three_halves_height_through_hmd_at():
     assert np.all(np.abs(H / (1.5 * h) - 1) < 0.005), H
 
 
-def test_inside_a_closed_sphere_mean_r_over_h_is_one_through_render():
+def test_inside_a_closed_sphere_mean_r_over_h_is_one_through_render() -> None:
     s = hmdist.Scene.builtin("sphere")
     r = 2.5
     H, report = s.render(method="gather", rays=1024, size=(24, 24), seed=3)
@@ -46,12 +48,12 @@ needs_cli = pytest.mark.skipif(not Path(CLI).exists() and not os.environ.get("HM
     ("gather", ["--rays", "32"]),
     ("photon2", ["--photons", "20000", "--gather", "64"]),
 ])
-def test_render_equals_the_clis_exr_bit_for_bit(tmp_path, method, args):
+def test_render_equals_the_clis_exr_bit_for_bit(tmp_path: Path, method: str, args: list[str]) -> None:
     exr = tmp_path / "h.exr"
     subprocess.run([CLI, "render", "--quiet", "--scene", "cube", "--method", method,
                     "--size", "40x30", "--seed", "5", "--out", str(exr), *args], check=True)
     # `gather` is K's older name (`nearest`): both spellings are kept.
-    params = {"rays": 32} if method == "gather" else {"photons": 20000, "nearest": 64}
+    params: dict[str, Any] = {"rays": 32} if method == "gather" else {"photons": 20000, "nearest": 64}
     H, report = hmdist.Scene.builtin("cube").render(method=method, size=(40, 30), seed=5, **params)
     cli = hmdist.read_exr(exr)
     assert cli.shape == H.shape == (30, 40)
@@ -59,7 +61,7 @@ def test_render_equals_the_clis_exr_bit_for_bit(tmp_path, method, args):
     assert report["width"] == 40 and report["height"] == 30 and report["seed"] == 5
 
 
-def test_hmd_at_on_an_images_own_hits_keyed_by_pixel_equals_the_image():
+def test_hmd_at_on_an_images_own_hits_keyed_by_pixel_equals_the_image() -> None:
     s = hmdist.Scene.builtin("cube")
     cam = hmdist.Camera((0.3, 4.3, 4.7), (0.0, 1.6, -1.6), fov_y_deg=60, size=(32, 24))
     H, _ = s.render(cam, method="gather", rays=16, seed=2)
@@ -73,7 +75,7 @@ def test_hmd_at_on_an_images_own_hits_keyed_by_pixel_equals_the_image():
     assert np.median(np.abs(bare / H.ravel()[keys] - 1)) < 1e-4
 
 
-def test_from_arrays_equals_the_same_triangles_from_an_obj(tmp_path):
+def test_from_arrays_equals_the_same_triangles_from_an_obj(tmp_path: Path) -> None:
     V = np.array([[-2, 0, -2], [2, 0, -2], [2, 0, 2], [-2, 0, 2], [0, 1.5, 0]], dtype=np.float32)
     F = np.array([[0, 1, 2], [0, 2, 3], [0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]])
     obj = tmp_path / "tent.obj"
@@ -87,7 +89,7 @@ def test_from_arrays_equals_the_same_triangles_from_an_obj(tmp_path):
     assert np.array_equal(Ha.view(np.uint32), Hb.view(np.uint32))
 
 
-def test_cast_gives_distances_and_inf_for_misses():
+def test_cast_gives_distances_and_inf_for_misses() -> None:
     s = hmdist.Scene.builtin("slab")
     origins = np.array([[0, 0.5, 0], [0, 0.5, 0], [0, 2, 0]], dtype=np.float32)
     t = s.cast(origins, np.array([[0, 1, 0], [0, -2, 0], [0, 1, 0]], dtype=float))
@@ -95,18 +97,18 @@ def test_cast_gives_distances_and_inf_for_misses():
     assert np.allclose(t[:2], [0.5, 0.5]) and t[2] == np.inf
 
 
-def test_f_diff_is_the_mean_absolute_difference_in_percent_of_the_diagonal():
+def test_f_diff_is_the_mean_absolute_difference_in_percent_of_the_diagonal() -> None:
     a = np.ones((2, 2), dtype=np.float32)
     b = a.copy()
     b[0, 0] = 3.0
     assert hmdist.f_diff(a, b, l_diag=10.0) == pytest.approx(2.0 / 4 * 100 / 10)
 
 
-def test_bad_arrays_and_parameters_raise_the_right_exception(tmp_path):
+def test_bad_arrays_and_parameters_raise_the_right_exception(tmp_path: Path) -> None:
     s = hmdist.Scene.builtin("slab")
     n = np.array([[0.0, 1.0, 0.0]])
-    with pytest.raises(ValueError, match="must hold floats"):
-        s.hmd_at(np.array([[0, 0, 0]]), n)
+    with pytest.raises(ValueError, match="must hold numbers"):
+        s.hmd_at(np.array([["a", "b", "c"]]), n)
     with pytest.raises(ValueError, match=r"shape \[n, 3\]"):
         s.hmd_at(np.zeros((4, 2)), n)
     with pytest.raises(ValueError, match="not finite"):
@@ -133,16 +135,16 @@ def test_bad_arrays_and_parameters_raise_the_right_exception(tmp_path):
     assert issubclass(hmdist.DeviceError, Exception)
 
 
-def test_the_readmes_python_example_runs():
+def test_the_readmes_python_example_runs() -> None:
     text = (REPO / "README.md").read_text()
     start = text.index('```python\nimport hmdist, numpy as np\n\ns = hmdist.Scene.builtin("cube")')
     code = text[start + len("```python\n"):text.index("```\n", start + 10)]
-    scope = {}
+    scope: dict[str, Any] = {}
     exec(compile(code, "README.md", "exec"), scope)
     assert scope["H"].shape == (256, 256) and scope["t"][0] == pytest.approx(1.0)
 
 
-def test_the_example_script_runs_with_or_without_matplotlib(tmp_path):
+def test_the_example_script_runs_with_or_without_matplotlib(tmp_path: Path) -> None:
     script = REPO / "python" / "examples" / "render_cube.py"
     out = subprocess.run([sys.executable, str(script), str(tmp_path / "cube.png")],
                          capture_output=True, text=True, check=True).stdout
@@ -150,7 +152,7 @@ def test_the_example_script_runs_with_or_without_matplotlib(tmp_path):
     assert "wrote" in out or "pip install matplotlib" in out
 
 
-def _interrupt_after(seconds):
+def _interrupt_after(seconds: float) -> threading.Timer:
     """Sends this process SIGINT (Ctrl-C) after `seconds`, from another thread."""
     timer = threading.Timer(seconds, os.kill, (os.getpid(), signal.SIGINT))
     timer.start()
@@ -158,7 +160,7 @@ def _interrupt_after(seconds):
 
 
 @pytest.fixture
-def ctrl_c_raises():
+def ctrl_c_raises() -> Iterator[None]:
     """SIGINT raises KeyboardInterrupt, as at a terminal, during the test. (A shell starts its
     background jobs with SIGINT ignored, and Python then leaves it ignored: run that way, the
     test would wait for the whole render.)"""
@@ -168,13 +170,13 @@ def ctrl_c_raises():
 
 
 @pytest.mark.parametrize("call", ["render", "hmd_at", "cast"])
-def test_ctrl_c_stops_the_work_within_a_second_and_the_next_call_works(call, ctrl_c_raises):
+def test_ctrl_c_stops_the_work_within_a_second_and_the_next_call_works(call: str, ctrl_c_raises: None) -> None:
     s = hmdist.Scene.builtin("cube")
     p = np.array([[0.0, 0.0, 0.0]] * 64)
     n = np.array([[0.0, 1.0, 0.0]] * 64)
     rays = 8_000_000 if call == "cast" else 1
     o, d = np.zeros((rays, 3)), np.tile([0.3, 1.0, 0.2], (rays, 1))
-    long = {  # render and hmd_at take minutes on two cores, cast about a second
+    long: Callable[[], Any] = {  # render and hmd_at take minutes on two cores, cast about a second
         "render": lambda: s.render(size=(64, 64), rays=1 << 20),
         "hmd_at": lambda: s.hmd_at(p, n, rays=1 << 26),
         "cast": lambda: s.cast(o, d),
@@ -194,14 +196,15 @@ def test_ctrl_c_stops_the_work_within_a_second_and_the_next_call_works(call, ctr
     assert np.array_equal(H.view(np.uint32), again.view(np.uint32)) and np.all(np.isfinite(H))
 
 
-def test_points_and_sizes_may_be_lists_tuples_or_arrays():
+def test_points_and_sizes_may_be_lists_tuples_or_arrays() -> None:
     s = hmdist.Scene.builtin("cube")
     tuples = hmdist.Camera((0.3, 4.3, 4.7), (0.0, 1.6, -1.6), up=(0, 1, 0), size=(12, 9))
-    for eye, target, up, size in [
+    forms: list[tuple[Any, Any, Any, Any]] = [
         ([0.3, 4.3, 4.7], [0, 1.6, -1.6], [0, 1, 0], [12, 9]),
         (np.array([0.3, 4.3, 4.7]), np.array([0.0, 1.6, -1.6], dtype=np.float32), np.array([0, 1, 0]),
          np.array([12, 9])),
-    ]:
+    ]
+    for eye, target, up, size in forms:
         cam = hmdist.Camera(eye, target, up=up, size=size)
         assert repr(cam) == repr(tuples)
         H, _ = s.render(cam, rays=4)
@@ -214,7 +217,7 @@ def test_points_and_sizes_may_be_lists_tuples_or_arrays():
         hmdist.Camera([0, 1, 2], [0, 0, 0], size=(12.5, 9))
 
 
-def test_render_returns_the_aovs_asked_for_as_arrays(tmp_path):
+def test_render_returns_the_aovs_asked_for_as_arrays(tmp_path: Path) -> None:
     s = hmdist.Scene.builtin("cube")
     H, report, aovs = s.render(size=(16, 12), rays=64, rounds=4, aov=["relerr", "rays", "dmin"])
     assert sorted(aovs) == ["dmin", "rays", "relerr"] and report["channels"][0] == "Y"
@@ -233,7 +236,7 @@ def test_render_returns_the_aovs_asked_for_as_arrays(tmp_path):
         s.render(size=(4, 4), aov=["depth"])
 
 
-def test_a_missing_gpu_raises_device_error():
+def test_a_missing_gpu_raises_device_error() -> None:
     # No Vulkan driver at all (the loader reads only the named, missing file).
     code = ("import hmdist, numpy as np\n"
             "s = hmdist.Scene.builtin('slab')\n"
@@ -246,7 +249,7 @@ def test_a_missing_gpu_raises_device_error():
     assert out.stdout.startswith("DeviceError:"), out.stdout + out.stderr
 
 
-def test_a_method_parameter_added_to_its_struct_is_a_keyword():
+def test_a_method_parameter_added_to_its_struct_is_a_keyword() -> None:
     # `sampler` is one field of gather's parameter struct, nothing on the Python side.
     s = hmdist.Scene.builtin("cube")
     grid, _ = s.render(size=(8, 6), rays=16, seed=4)
@@ -257,7 +260,7 @@ def test_a_method_parameter_added_to_its_struct_is_a_keyword():
         s.render(size=(8, 6), rays=16, sampler="halton")
 
 
-def test_adaptive_takes_its_sampler_and_both_tolerances_as_keywords():
+def test_adaptive_takes_its_sampler_and_both_tolerances_as_keywords() -> None:
     # Issue #25: adaptive's sobol blocks, --abs-tolerance and --loosen, with nothing on the
     # Python side; the rays AOV keeps to the budget and the report names what was asked.
     s = hmdist.Scene.builtin("cube")
@@ -271,11 +274,11 @@ def test_adaptive_takes_its_sampler_and_both_tolerances_as_keywords():
         s.render(size=(4, 4), method="adaptive", tolerance=0.0)
 
 
-def test_the_cube_map_by_rays_is_a_keyword_and_agrees_with_the_cpu_backend():
+def test_the_cube_map_by_rays_is_a_keyword_and_agrees_with_the_cpu_backend() -> None:
     # `gpu_fill` is one field of the cube map's parameter struct: the GPU (lavapipe in CI)
     # fills the looked-up texels by rays, the CPU backend's image up to the GPU's rounding.
     s = hmdist.Scene.builtin("cube")
-    params = dict(method="cubemap", size=(16, 16), rays=16, cube_res=8)
+    params: dict[str, Any] = dict(method="cubemap", size=(16, 16), rays=16, cube_res=8)
     try:
         by_rays, report = s.render(backend="gpu-software", gpu_fill="rays", **params)
     except hmdist.DeviceError as e:
@@ -288,3 +291,113 @@ def test_the_cube_map_by_rays_is_a_keyword_and_agrees_with_the_cpu_backend():
     assert np.nanmax(np.abs(by_rays - cpu) / cpu) < 1e-4
     with pytest.raises(ValueError, match="gpu_fill"):
         s.render(size=(4, 4), method="cubemap", rays=4, gpu_fill="sideways")
+
+
+def test_points_may_be_integers_or_one_point_and_counts_any_whole_number() -> None:
+    # Issue #51 item 16: int arrays and a single [3] point were refused, size had to be a
+    # tuple, numpy integers were refused as rays, 2.7 rays were truncated, -1 was an
+    # OverflowError, and render(camera, size=...) ignored the size.
+    s = hmdist.Scene.builtin("cube")
+    assert s.cast([[2, 2, 2]], [[0, -1, 0]]).tolist() == [2.0]
+    one = s.cast([2, 2, 2], [0, -1, 0])
+    assert isinstance(one, np.float32) and one == 2.0
+    grid = s.cast(np.full((2, 3, 3), 2), np.tile([0, -1, 0], (2, 3, 1)))
+    assert grid.shape == (2, 3) and np.all(grid == 2.0)
+    p, n = np.array([[1, 0, 1]]), np.array([[0, 1, 0]])
+    as_floats = s.hmd_at(p.astype(float), n.astype(float), rays=16)
+    assert np.array_equal(s.hmd_at(p, n, rays=np.int64(16)), as_floats)
+    assert s.hmd_at(p[0], n[0], rays=16.0) == as_floats[0]
+    for size in ([8, 6], np.array([8, 6]), (np.int32(8), 6)):
+        H, _ = s.render(size=size, rays=np.int64(4), seed=np.uint8(3))
+        assert H.shape == (6, 8)
+    cam = hmdist.Camera((0.3, 4.3, 4.7), (0.0, 1.6, -1.6), size=(12, 9))
+    assert s.render(cam, size=(8, 6), rays=4)[0].shape == (6, 8)
+    assert s.render(cam, rays=4)[0].shape == (9, 12)
+    assert s.primary_hits(cam, size=[8, 6])["triangles"].shape == (48,)
+    cases: list[tuple[dict[str, Any], str]] = [
+        (dict(rays=2.7), "rays must be a whole number, not 2.7"),
+        (dict(rays=-1), "rays must be between 0 and"),
+        (dict(seed=-1), "seed must be between 0 and")]
+    for bad, match in cases:
+        with pytest.raises(ValueError, match=match):
+            s.hmd_at(p, n, **bad)
+    cases = [(dict(rays=-1), "rays"), (dict(seed=-1), "seed must be between"),
+             (dict(rays=2.7), "rays"), (dict(size=(8, 0)), "size must be two positive"),
+             (dict(size=(8, 6.5)), "size must be two positive")]
+    for bad, match in cases:
+        with pytest.raises(ValueError, match=match):
+            s.render(**{"size": (4, 4), **bad})
+
+
+def test_threads_may_render_one_scene_at_once() -> None:
+    # Issue #51 item 17: the second thread got "RuntimeError: Already borrowed".
+    s = hmdist.Scene.builtin("cube")
+    cam = hmdist.Camera((0.3, 4.3, 4.7), (0.0, 1.6, -1.6), size=(20, 16))
+    alone = [s.render(cam if i % 2 else None, rays=64, size=(20, 16), seed=i)[0] for i in range(4)]
+    together: list[Any] = [None] * 4
+    errors: list[BaseException] = []
+
+    def work(i: int) -> None:
+        try:
+            together[i] = s.render(cam if i % 2 else None, rays=64, size=(20, 16), seed=i)[0]
+        except BaseException as e:  # noqa: B902 - reported below
+            errors.append(e)
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert errors == []
+    for a, b in zip(alone, together):
+        assert np.array_equal(a.view(np.uint32), b.view(np.uint32))
+
+
+def test_cameras_are_checked_readable_and_pickled_and_scenes_pickle() -> None:
+    # Issue #51 item 18.
+    cameras: list[tuple[list[float], list[float], list[float], str]] = [
+        ([np.nan, 0, 0], [0, 0, 1], [0, 1, 0], "non-finite"),
+        ([1, 1, 1], [1, 1, 1], [0, 1, 0], "eye and target are the same"),
+        ([0, 0, 0], [0, 2, 0], [0, 1, 0], "parallel to its view")]
+    for eye, target, up, match in cameras:
+        with pytest.raises(ValueError, match=f"bad camera: .*{match}"):
+            hmdist.Camera(eye, target, up=up)
+    cam = hmdist.Camera([0.3, 4.3, 4.7], [0, 1.6, -1.6], fov_y_deg=50, size=(12, 9))
+    assert (cam.eye, cam.target, cam.up) == ([0.3, 4.3, 4.7], [0.0, 1.6, -1.6], [0.0, 1.0, 0.0])
+    assert (cam.fov_y_deg, cam.size) == (50.0, (12, 9))
+    again = pickle.loads(pickle.dumps(cam))
+    assert again == cam and repr(again) == repr(cam)
+    s = hmdist.Scene.builtin("hall")
+    copy = pickle.loads(pickle.dumps(s))
+    assert copy.info == s.info
+    a, _ = s.render(cam, method="photon1", photons=5000, nearest=16)
+    b, _ = copy.render(cam, method="photon1", photons=5000, nearest=16)
+    assert np.array_equal(a.view(np.uint32), b.view(np.uint32))
+    with pytest.raises(ValueError, match="the built-in scenes are cube, hall, sphere, slab, dome"):
+        hmdist.Scene.builtin("nope")
+    H = np.ones((2, 2), dtype=np.float32)
+    for l_diag in (0.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match="l_diag must be a positive finite length"):
+            hmdist.f_diff(H, H, l_diag)
+
+
+def test_a_render_without_xdg_runtime_dir_prints_nothing_and_leaves_nothing(tmp_path: Path) -> None:
+    # Issue #51 item 19: each default-backend render printed "error: XDG_RUNTIME_DIR is
+    # invalid or not set" twice (Mesa's Wayland probe), where the CLI prints nothing.
+    code = ("import hmdist\n"
+            "H, _ = hmdist.Scene.builtin('cube').render(size=(4, 4), rays=4)\n"
+            "print(H.shape)\n")
+    env = {k: v for k, v in os.environ.items() if k != "XDG_RUNTIME_DIR"}
+    env["TMPDIR"] = str(tmp_path)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                         timeout=120, check=True)
+    assert out.stdout == "(4, 4)\n" and out.stderr == "", out.stderr
+    assert list(tmp_path.iterdir()) == [], "the private runtime folder is removed at exit"
+
+
+def test_the_package_has_a_version_and_type_information() -> None:
+    # Issue #51 item 20; `mypy --strict` over python/tests and python/examples runs in
+    # scripts/test.
+    assert hmdist.__version__ == "0.1.0"
+    package = Path(hmdist.__file__).parent
+    assert (package / "py.typed").exists() and (package / "_hmdist.pyi").exists()
