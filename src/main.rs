@@ -42,12 +42,22 @@ fn die_quietly_on_a_closed_pipe() {
 /// On a headless Linux machine Mesa's Vulkan driver, probed by the cube map's GPU backend,
 /// prints "XDG_RUNTIME_DIR is invalid or not set" when that variable is unset. Point it at a
 /// private empty folder for the life of the process (still single-threaded here); returns the
-/// folder to remove at exit.
+/// folder to remove at exit. The empty folders of runs killed outright (SIGKILL), whose PID is
+/// gone, are removed first.
 fn quiet_headless_vulkan() -> Option<std::path::PathBuf> {
     #[cfg(target_os = "linux")]
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
         use std::os::unix::fs::DirBuilderExt;
-        let dir = std::env::temp_dir().join(format!("hmdist-runtime-{}", std::process::id()));
+        const PREFIX: &str = "hmdist-runtime-";
+        let temp = std::env::temp_dir();
+        for entry in std::fs::read_dir(&temp).into_iter().flatten().flatten() {
+            let name = entry.file_name();
+            let pid = name.to_str().and_then(|n| n.strip_prefix(PREFIX)?.parse::<u32>().ok());
+            if pid.is_some_and(|pid| !std::path::Path::new(&format!("/proc/{pid}")).exists()) {
+                let _ = std::fs::remove_dir(entry.path()); // only if empty: nothing of anyone's lost
+            }
+        }
+        let dir = temp.join(format!("{PREFIX}{}", std::process::id()));
         if std::fs::DirBuilder::new().mode(0o700).create(&dir).is_ok() {
             std::env::set_var("XDG_RUNTIME_DIR", &dir);
             return Some(dir);

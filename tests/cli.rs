@@ -241,6 +241,36 @@ fn a_temporary_a_killed_run_left_is_removed_by_the_next_run_that_writes_there() 
     assert!(live.exists(), "a live run's temporary is kept");
 }
 
+#[test]
+fn the_runtime_folder_a_killed_run_left_is_removed_by_the_next_run() {
+    // Without XDG_RUNTIME_DIR each run makes an empty private folder, TMPDIR/hmdist-runtime-PID,
+    // and removes it at exit; a run killed outright (SIGKILL) left it behind for good.
+    let dir = Scratch::new("cli-stale-runtime");
+    let temp = dir.join("tmp");
+    let mut gone = std::process::Command::new("true").spawn().unwrap();
+    gone.wait().unwrap();
+    let stale = temp.join(format!("hmdist-runtime-{}", gone.id()));
+    let live = temp.join(format!("hmdist-runtime-{}", std::process::id()));
+    let not_empty = temp.join(format!("hmdist-runtime-{}x", gone.id()));
+    for folder in [&stale, &live, &not_empty] {
+        std::fs::create_dir_all(folder).unwrap();
+    }
+    std::fs::write(not_empty.join("kept"), b"not ours").unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hmdist"))
+        .args(["render", "--quiet", "--size", "8x8", "--rays", "4", "--out", "o.exr"])
+        .current_dir(dir.path())
+        .env_remove("XDG_RUNTIME_DIR")
+        .env("TMPDIR", &temp)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(!stale.exists(), "the dead run's folder is removed");
+    assert!(live.exists() && not_empty.exists(), "a live run's folder and other folders are kept");
+    let mut left: Vec<_> = std::fs::read_dir(&temp).unwrap().map(|e| e.unwrap().file_name()).collect();
+    left.sort();
+    assert_eq!(left.len(), 2, "this run removed its own folder: {left:?}");
+}
+
 /// `hmdist render --size SIZE --out o.exr` in a fresh folder under an address-space limit
 /// (`ulimit -v`) of `limit` bytes, with `env` set: its output and what it left there.
 fn render_under_address_space_limit(
