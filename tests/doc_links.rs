@@ -1,6 +1,7 @@
 //! The published pages and docs link only files that exist: every relative `href` and `src`
 //! of the HTML reports under docs/ and every relative Markdown link of README.md and docs/
-//! names a file in the repository, and every `#anchor` of an HTML page names a section on it.
+//! names a file in the repository, and every `#anchor` names a section: an `id` of an HTML
+//! page, or a heading of a Markdown page (by GitHub's rule for its anchor).
 
 use std::path::{Path, PathBuf};
 
@@ -54,7 +55,38 @@ fn external(target: &str) -> bool {
     target.contains("://") || target.starts_with("mailto:")
 }
 
-/// Checks one link of the page `page`: a file beside it, or an anchor of `page_text` (HTML).
+/// GitHub's anchor of a Markdown heading: lower case, spaces as hyphens, punctuation other
+/// than `-` and `_` dropped ("Final gathering (`--method gather`)": `final-gathering---method-gather`).
+fn heading_anchor(heading: &str) -> String {
+    heading
+        .trim()
+        .chars()
+        .filter_map(|c| match c {
+            ' ' => Some('-'),
+            '-' | '_' => Some(c),
+            c if c.is_alphanumeric() => Some(c),
+            _ => None,
+        })
+        .flat_map(char::to_lowercase)
+        .collect()
+}
+
+/// Whether `text` (an HTML page or, for `markdown`, a Markdown one) has a section `anchor`.
+fn has_section(text: &str, markdown: bool, anchor: &str) -> bool {
+    if !markdown {
+        return text.contains(&format!("id=\"{anchor}\""));
+    }
+    let mut in_code = false;
+    text.lines().any(|line| {
+        if line.trim_start().starts_with("```") {
+            in_code = !in_code;
+        }
+        !in_code && line.starts_with('#') && heading_anchor(line.trim_start_matches('#')) == anchor
+    })
+}
+
+/// Checks one link of the page `page`: a file beside it, and the anchor, if any, of that file
+/// (or of `page_text` itself).
 fn check(page: &Path, page_text: &str, target: &str, broken: &mut Vec<String>) {
     if external(target) {
         return;
@@ -63,19 +95,28 @@ fn check(page: &Path, page_text: &str, target: &str, broken: &mut Vec<String>) {
         Some((file, anchor)) => (file, Some(anchor)),
         None => (target, None),
     };
-    if file.is_empty() {
-        let is_html = page.extension().is_some_and(|e| e == "html");
-        if let (Some(anchor), true) = (anchor, is_html) {
-            if !page_text.contains(&format!("id=\"{anchor}\"")) {
-                broken.push(format!("{}: #{anchor} names no section", page.display()));
-            }
-        }
-        return;
-    }
-    let path = page.parent().unwrap().join(file);
+    let path = if file.is_empty() { page.to_path_buf() } else { page.parent().unwrap().join(file) };
     if !path.exists() {
         broken.push(format!("{}: {target} does not exist", page.display()));
+        return;
     }
+    let Some(anchor) = anchor else { return };
+    let markdown = path.extension().is_some_and(|e| e == "md");
+    let html = path.extension().is_some_and(|e| e == "html");
+    if !markdown && !html {
+        return;
+    }
+    let text = if file.is_empty() { page_text.to_string() } else { std::fs::read_to_string(&path).unwrap() };
+    if !has_section(&text, markdown, anchor) {
+        broken.push(format!("{}: {target}: #{anchor} names no section", page.display()));
+    }
+}
+
+#[test]
+fn a_headings_anchor_is_githubs() {
+    assert_eq!(heading_anchor(" Final gathering (`--method gather`)"), "final-gathering---method-gather");
+    assert_eq!(heading_anchor(" Reliability: what hmdist promises"), "reliability-what-hmdist-promises");
+    assert_eq!(heading_anchor(" Accuracy against cost: f_diff"), "accuracy-against-cost-f_diff");
 }
 
 #[test]

@@ -135,12 +135,13 @@ def test_bad_arrays_and_parameters_raise_the_right_exception(tmp_path: Path) -> 
     assert issubclass(hmdist.DeviceError, Exception)
 
 
-def test_the_readmes_python_example_runs() -> None:
-    text = (REPO / "README.md").read_text()
+@pytest.mark.parametrize("page", ["README.md", "docs/python.md"])
+def test_the_docs_python_examples_run(page: str) -> None:
+    text = (REPO / page).read_text()
     start = text.index('```python\nimport hmdist, numpy as np\n\ns = hmdist.Scene.builtin("cube")')
     code = text[start + len("```python\n"):text.index("```\n", start + 10)]
     scope: dict[str, Any] = {}
-    exec(compile(code, "README.md", "exec"), scope)
+    exec(compile(code, page, "exec"), scope)
     assert scope["H"].shape == (256, 256) and scope["t"][0] == pytest.approx(1.0)
 
 

@@ -2,12 +2,12 @@
 //! fastest SIMD kernel the CPU has ([`super::kernel`]) with our watertight triangle test.
 //!
 //! Choices, measured on the `cube` and `hall` rooms and a 5 M-triangle sphere (see
-//! `cargo bench --bench gather` and `benches/embree/compare.sh`):
+//! `cargo bench --bench gather`, `benches/embree/compare.sh` and `docs/engine.md`):
 //! - Our own wide BVH and kernels instead of obvhs's compressed wide BVH: its quantised nodes
 //!   cost about 250 instructions per node test on a CPU; a float node's eight slab tests are
 //!   about 25 AVX2 instructions, and a leaf block's eight triangle tests about 90.
 //! - The binary BVH that is collapsed comes from our binned SAH builder
-//!   ([`BuildQuality::Fast`]: about 10× faster to build than obvhs's best, 4–8 % slower to
+//!   ([`BuildQuality::Fast`]: about 10× faster to build than obvhs's best, a little slower to
 //!   trace) or from obvhs's slowest, best preset ([`BuildQuality::High`]); the default picks
 //!   by the rays to come ([`BuildQuality::Auto`]).
 //! - The node test is pbrt-v4's conservative one: slab distances `(b − o)·(1/d)` carry at most

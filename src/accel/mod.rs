@@ -1,25 +1,24 @@
-//! Ray casting: closest hits against the scene's triangles (SPEC §2).
+//! Ray casting: closest hits against the scene's triangles (SPEC §2). The engine's design,
+//! and what was measured and not kept: `docs/engine.md`.
 //!
 //! Guarantees every estimator relies on:
 //! - **Watertight**: a ray cannot slip between two triangles that share an edge
 //!   (`triangle.rs`), and BVH boxes are tested conservatively (`kernel/`). In a closed room no
 //!   ray escapes.
 //! - **Robust origins**: a ray leaving a surface starts at [`offset_ray_origin`] of the hit,
-//!   and hits closer than their own `t` error bound (whose sign cannot be trusted) are
-//!   rejected, so a ray never re-hits the surface it leaves and never sees a neighbouring
-//!   facet at a spurious tiny distance; near-horizon hits in concave places are kept.
-//!   One exception keeps closed meshes closed: a ray that would otherwise escape takes the
-//!   nearest such hit, unless it lies in the plane of the triangle the ray leaves. (A point a
-//!   few ulps from a second wall, in a room's corner, really does see that wall; rejecting
-//!   the hit let rays leak out of `cube`. Accepting all such hits instead darkened 0.7 % of
-//!   `cube`'s pixels, near facet edges, with spurious tiny distances; and a face's coincident
+//!   and hits closer than their own `t` error bound (whose sign cannot be trusted) are set
+//!   aside, so a ray never re-hits the surface it leaves and never sees a neighbouring facet
+//!   at a spurious tiny distance; near-horizon hits in concave places are kept. One exception
+//!   keeps closed meshes closed: a ray that would otherwise escape takes the nearest such hit,
+//!   unless it lies in the plane of the triangle the ray leaves. (A point a few ulps from a
+//!   second wall, in a room's corner, really does see that wall; a face's coincident
 //!   duplicate, common in real files, is in the plane the ray leaves and so never hit.)
 //! - **The same bits on every CPU path**: the kernels (scalar, AVX2, AVX-512) return the same
 //!   hit distances bit for bit, and so the same images; `HMDIST_KERNEL` forces one.
-//!
 //! - **The same answer whatever the visit order**: among hits at equal `t` the lowest triangle
 //!   index wins, and nothing that could hold such a tie is culled (`traverse.rs`), so BVH
-//!   presets, packets and the GPU agree bit for bit.
+//!   presets and packets agree bit for bit; the GPU's traversal follows the same rule, with
+//!   its own rounding.
 //!
 //! The interface is [`RayCaster`]: no per-ray allocation and no dynamic dispatch; estimators
 //! are generic over it. [`Accel`] is the implementation: an 8-wide BVH (`wide.rs`) traversed

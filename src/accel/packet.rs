@@ -4,9 +4,11 @@
 //! child by child against every active ray at once, the children that some ray meets are
 //! ordered by the nearest entry distance among those rays, and each goes on the stack with
 //! the rays that met it and their entry distances (so a ray that has since found a closer hit
-//! drops out when the entry is popped). Leaf blocks are tested ray by ray with the single-ray
-//! kernel, and once fewer than [`SINGLE_BELOW`] rays of a packet are left in a subtree, they
-//! finish it one at a time ([`super::traverse::descend`]).
+//! drops out when the entry is popped). Before that, a first test of all eight children
+//! against the packet as a whole ([`PacketBounds`]) skips those that no ray can meet. Leaf
+//! blocks are tested ray by ray with the single-ray kernel, and once fewer than
+//! [`SINGLE_BELOW`] rays of a packet are left in a subtree, they finish it one at a time
+//! ([`super::traverse::descend`]).
 //!
 //! The answer for each ray is bit for bit the single-ray one: the box tests perform the
 //! single-ray kernel's IEEE operations (the same slab distances, min/max order and far-scale,
@@ -14,66 +16,26 @@
 //! closest hit does not depend on the order of the visit (ties of `t` go to the lowest
 //! triangle index: see [`super::traverse`]).
 //!
-//! Measured and not kept (`gather_rays order`, same rays, 2 threads): without the interval
-//! pre-test, testing every child ray by ray, packets were no faster than single rays;
-//! prefetching the children pushed on the stack gained 3–5 % on `cube` at 256 rays per point
-//! and nothing, or lost, at 4,096 and on `hall`; packets of ray j of 8 neighbouring pixels
-//! (different origins, one stratum) were no better than 4 × 2 blocks of one point's strata.
-//! Wider packets and the shared origin (2026-12-03): traversal generic over one, two or four
-//! groups of eight lanes (4 × 4, 8 × 2, 4 × 8, 8 × 4 blocks of strata, up to 32 rays), each
-//! node's `b − o` computed once for the packet when all its rays leave one point (children
-//! picked by a lane permute), and leaf blocks translated to that point once and then tested
-//! ray by ray. Bit-identical, and it cut node visits per ray (`gather_rays stats`, packet +
-//! single-ray nodes): `cube` 64² × 4,096 from 1.02 (4 × 2) to 0.62 (8 × 2) and 0.44 (8 × 4),
-//! `hall` 128² × 256 from 3.42 to 2.75 and 2.43; leaf blocks per ray stayed at 2.0 and 1.9,
-//! and that is where the time is. Mrays/s did not move beyond the noise (`cube` 256² × 256,
-//! 2 threads: 4 × 2 today 7.4–8.8, 8 × 2 8.2–8.6, 4 × 8 7.7–8.0; `hall`: today 5.5–6.2,
-//! 8 × 4 5.4–6.3), and the shared-origin 4 × 2 packet was 5–10 % *slower* on one thread
-//! (`cube` at 4,096: 4.6–5.3 vs 5.0–5.7 Mrays/s; the translated leaves won back part of
-//! that). Packets are not where the remaining time goes on scenes like these.
-//! Where it goes (2026-12-04, cachegrind on `gather_rays cast cube`, 32² × 256 rays, one
-//! thread, the 4 × 2 packet): about 1,225 instructions per ray in this traversal (packet
-//! nodes 0.88, single-ray nodes 2.2 and leaf blocks 1.98 per ray), of them about 480 AVX
-//! intrinsics: box tests of packet nodes (a packet node tests each met child for all eight
-//! lanes, ~30 operations a child) and the leaf blocks; the rest scalar: mask loops, the
-//! insertion sorts, stacks, the per-ray `descend` set-up. 11 L1 misses per ray, all served
-//! by L2/L3 (none leave the simulated last level); 12 mispredicted branches per ray in
-//! cachegrind's simple predictor, most on the mask loops and the sort. At ~4 M rays/s a core
-//! that is ~750 cycles a ray if the VM's cores run near 3 GHz (it does not report its clock),
-//! an IPC near 1.6: the time is mostly instructions, not memory (a `perf` profile puts ~14 %
-//! on first loads of leaf blocks and nodes: see [`super::traverse`]), so a faster traversal
-//! must do less per ray, not wait less.
+//! **Coherent packets.** At many rays per point (the reference's 65,536) a 4 × 2 block of
+//! strata spans a few hundredths of a radian and its rays meet nearly the same nodes. So a
+//! packet whose directions differ by at most [`SPREAD`] takes an *inner* child on the
+//! interval test alone: all its active rays go on, each with the interval's smallest near
+//! distance, which is at most the ray's own (see [`PacketBounds`]), so no entry is culled
+//! sooner than the ray's own would be. A ray may so visit an inner node whose box it misses;
+//! it costs a little work and changes no hit, because *leaf* children are still tested ray by
+//! ray with the single-ray expressions: a ray tests a block only where its own box test
+//! admits it.
 //!
-//! **Coherent packets** (2026-12-04). At the reference's 65,536 rays per point a 4 × 2 block
-//! of strata spans a few hundredths of a radian and its rays meet nearly the same nodes
-//! (`perf`, one thread: leaf blocks ~48 % of this traversal, the packet nodes' tests, sorts
-//! and stacks most of the rest). So a packet whose directions differ by at most [`SPREAD`]
-//! takes an *inner* child on the interval test alone: all its active rays go on, each with
-//! the interval's smallest near distance, which is at most the ray's own (see
-//! [`PacketBounds`]), so no entry is culled sooner than the ray's own would be. A ray may so
-//! visit an inner node whose box it misses; it costs a little work and changes no hit,
-//! because *leaf* children are still tested ray by ray with the single-ray expressions: a ray
-//! tests a block only where its own box test admits it, as before.
-//! And where all the packet's rays leave one point along one dominant axis (a gather point's
-//! rays, nearly always), a leaf block's corners are translated to that point once for the
-//! packet ([`super::kernel::avx2::translated`]) and then tested ray by ray: the same IEEE
-//! operations as the single-ray test, a subtraction fewer per corner and ray.
-//! Instructions of a whole `gather_rays order … blocks` run (one thread, cachegrind; build
-//! and reading the rays included), against the commit before: `cube` 4² × 65,536 rays −9.8 %
-//! (the permuted origin kept in [`RayData`] and the finite lanes found in SIMD −2.3 %, the
-//! coherent inner children −4.9 %, the shared translation −2.9 %), 16² × 4,096 −3.5 %,
-//! 64² × 256 −1.8 %; `hall` 64² × 256 −0.4 %. The time moved less than the instructions:
-//! `hmdist render` of `cube` at 32² × 65,536 rays took 0.93× the time in one set of 9
-//! interleaved pairs and 0.99× in another; at 48² × 65,536 1.00× wall, 0.97× cpu (7 pairs);
-//! its `mrays_per_s` +1 to +5 % (3 pairs, with the commit after this one).
-//! Tried and not kept: certifying children that *every* ray meets (the interval's largest near
-//! against its smallest far), to skip only their ray-by-ray tests: it fired on 63 % of the
-//! tested children at 65,536 rays and still cost more (+1 %) than it saved, and ran on every
-//! packet; nor, for coherent packets only, to skip the ray-by-ray tests of the leaf children
-//! that every ray meets for sure (+3.6 % instructions at 65,536 rays).
+//! **A shared origin.** Where all the packet's rays leave one point along one dominant axis (a
+//! gather point's rays, nearly always), a leaf block's corners are translated to that point
+//! once for the packet ([`super::kernel::avx2::translated`]) and then tested ray by ray: the
+//! same IEEE operations as the single-ray test, a subtraction fewer per corner and ray.
 //!
 //! Closures inside this `#[target_feature]` code are not inlined and turn every intrinsic
 //! into a call (the packet ran 40 % slower): use `#[inline(always)]` functions.
+//!
+//! What packets gain, and the dead ends measured and not kept (no interval test, wider
+//! packets, pixel packets, prefetching, certifying children): `docs/engine.md`.
 
 use std::arch::x86_64::*;
 use std::mem::MaybeUninit;

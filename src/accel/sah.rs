@@ -2,38 +2,19 @@
 //! fast Construction of SAH-based Bounding Volume Hierarchies"), parallel over subtrees.
 //!
 //! Why our own: obvhs's best preset (`very_slow_build`: PLOC, spatial splits, whole-tree
-//! reinsertion) traces fastest but builds `hall` (608 K triangles) in 2.7 s, where Embree's
+//! reinsertion) traces fastest but builds `hall` (608 K triangles) in 2.6 s, where Embree's
 //! high-quality build takes 0.1–0.3 s; its fast preset builds in 0.3 s but traces `hall` 7×
-//! slower (PLOC's top levels suffer from large wall triangles). Top-down binned SAH gets
-//! within 3–8 % of the best tracing in about a tenth of the build time (`hall`: 0.24 s on 2
-//! cores; the whole build of 5.2 M triangles 2.4 s, 2.0 s since the collapse fills its blocks
-//! in parallel and the bins hold only boxes, 1.6 s with fewer bins for small nodes
-//! ([`bins_for`]) and the bins found four lanes at once); see `cargo bench --bench gather`. obvhs's
-//! spatial pre-splits of large triangles can be added (`pre_split`); on `cube` and `hall`
-//! they did not pay, so the `fast` preset leaves them out.
-//!
-//! **Where `high` traces faster, and what did not close the gap** (2026-12-05, `gather_rays
-//! stats` on the 256² × 256 rays of `benches/embree/compare.sh`, render's 4 × 2 packets:
-//! single-ray + packet node visits and leaf blocks per ray). `cube`: `fast` 2.38 + 0.79 and
-//! 1.97 blocks, `high` 1.90 + 0.79 and 1.96; `hall`: 3.19 + 0.93 and 1.81, `high` 2.96 +
-//! 0.80 and 1.80. So the gap (`render` of `cube`: 1.53 s against 1.43 s) is in the nodes above
-//! the blocks, not in the blocks. Tried on the `fast` tree:
-//! - obvhs's reinsertion optimiser on the binary tree before the collapse: batch ratio 0.3
-//!   took `cube` to 2.20 + 0.75 (0.02: 2.30 + 0.77) for 24 ms more build; `render` was 3 %
-//!   faster at 0.1 and 4 % at 0.3 (7 interleaved pairs each); on `hall` 0.1 changed nothing
-//!   for 67 ms more, 0.3
-//!   had not finished after 20 minutes, and 1.0 on `cube` overflowed a thread's stack (the
-//!   tree of one-triangle leaves grows deep). Not robust enough to keep.
-//! - More bins at the top (64, 128, 256 where the node is large enough): node visits −1 to
-//!   −4 %, but blocks +3 to +4 %.
-//! - Pre-splits again: `cube` 2.36 + 0.80 and 2.04 blocks (more blocks), `hall` unchanged.
-//! - obvhs's `medium_build` and `slow_build` (PLOC, no or few whole-tree passes): 10 and 6
-//!   times the blocks per ray on `cube` (its large wall triangles); `very_slow_build` without
-//!   its spatial splits: 1.97 + 0.77 nodes but 2.09 blocks, in 0.23 s.
+//! slower (PLOC's top levels suffer from large wall triangles). Top-down binned SAH traces
+//! nearly as fast in about a tenth of the build time (`hall`: 0.15 s on 2 cores); see
+//! `cargo bench --bench gather`. obvhs's spatial pre-splits of large triangles can be added
+//! (`pre_split`); on `cube` and `hall` they did not pay, so the `fast` preset leaves them out.
 //!
 //! The tree is the same for any thread count: each node's references are partitioned in
 //! place by the same rule, and a subtree's nodes go to a range of the node array fixed by its
 //! position, not by which thread built it.
+//!
+//! Build timings, where the `high` tree traces faster, and what was tried on this tree to
+//! close the gap and not kept: `docs/engine.md`.
 
 use glam::{Vec3A, Vec4};
 use obvhs::aabb::Aabb;

@@ -10,12 +10,10 @@
 //! `A(n) + D(n, 8)`) or hands its slots to its children (`D(n, i)`, for `i ≥ 2`), where
 //! `D(n, i)` is the cheapest split of `i` slots between the left and right subtrees.
 //!
-//! The greedy collapse it replaces (open the largest child until there are eight) filled the
-//! bottom of the tree with wide nodes of two to four leaves: on the 5.2 M-triangle sphere of
-//! `benches/embree/compare.sh` 296 K wide nodes, 4.1 children each, against 168 K and 6.5
-//! here; on `cube` 4,391 against 2,796. Tracing the same rays (`gather_rays cast`, 2 threads,
-//! medians of 5 interleaved runs, 3 on the sphere): `cube` 256² × 256 ×1.05, 64² × 4,096
-//! ×1.04, `hall` ×1.06, the sphere's trace 3.35 s → 2.91 s.
+//! Against the greedy collapse (open the largest child until there are eight), which fills
+//! the bottom of the tree with wide nodes of two to four leaves, this makes fewer, fuller
+//! nodes and traces 4–6 % faster on `cube` and `hall`, 13 % on a 5.2 M-triangle sphere (the
+//! figures: `docs/engine.md`).
 
 use super::WIDTH;
 

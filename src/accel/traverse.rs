@@ -8,33 +8,9 @@
 //!
 //! Every hit child is prefetched as soon as the node test names it, before the sort: the
 //! sort and the pushes then overlap the wait for the next node or block, whose address the
-//! load would otherwise learn only after them. `gather_rays cast`, 2 threads, medians of
-//! interleaved runs: `cube` 128² × 256 0.515 → 0.476 s (6 pairs), the 5.2 M-triangle sphere
-//! 256² × 64 3.59 → 3.15 s (3 pairs), `hall` 128² × 256 unchanged (0.67 s). Prefetching
-//! also the children a packet meets (`packet.rs`) changed nothing further (8 pairs).
-//!
-//! Measured on `cube` (256 gather rays, AVX2, one thread) and not kept: several rays taking
-//! turns node by node, so that one computes while another waits for memory (17 % slower: it
-//! defeats the branch predictor); prefetching only the pushed children, at the push (no
-//! change); special paths for one and two hit children before the sort (no change).
-//! Without branches (2026-12-05): the kernel sorting the eight children's keys (near
-//! distance bits, slot in the lowest three) in a bitonic network of six AVX2 layers and
-//! writing them as stack entries, farthest first, straight onto the stack, so that no loop
-//! runs over the hit children. It took 0.9 mispredicts per ray off cachegrind's model (of
-//! 11.5) but added 4.5 % instructions, and `render` of `cube` 256² × 256 (2 threads, 5
-//! interleaved pairs) took 1.58 s against 1.50; with only the two nearest children
-//! prefetched, 1.65 s. The branches the sort replaces are mostly predicted: the time is in
-//! instructions.
-//!
-//! **What the tests cost on the critical path** (2026-12-05, `render` of `cube` 256² × 256, 2
-//! threads, 5 interleaved pairs against the same code): every leaf block test done a second
-//! time (kept alive by `black_box`, its answer unused) cost 8 % more time (1.51 → 1.63 s),
-//! every single-ray node test done twice 3.6 % (1.54 → 1.60 s). The second copy depends on
-//! nothing the traversal waits for, so the core runs it in the gaps of the first: the leaf
-//! tests' arithmetic takes about 8 % of the core's issue time and the node tests' about 4 %;
-//! most of a ray's time is the wait along node → mask → next node → block → `t`. Work added
-//! on that chain costs in full (the sort above); a cheaper test would pay only by shortening
-//! it.
+//! load would otherwise learn only after them. That wait, along node → mask → next node →
+//! block → `t`, is most of a ray's time: work added on the chain costs in full, and a cheaper
+//! test pays only by shortening it.
 //!
 //! Hits within their own `t` error bound (see [`super::triangle`]) are kept aside and taken
 //! only if the ray finds nothing else, and only where `accept_within_error` allows (see
@@ -47,35 +23,15 @@
 //! box test's own rounding), and a leaf block is tested against the best `t` widened by
 //! [`FAR_SCALE`], so a triangle whose `t` rounds to the best one is never lost to the rounding
 //! of the test's `t·det` comparison; the exact comparison is then made on the `t` values.
-//! So every traversal order (this one, a packet's, another BVH preset's, the GPU's) returns the
-//! same `(t, triangle)`.
-//!
-//! Measured and not kept: testing first the leaf block that the previous (neighbouring
-//! stratum's) ray hit, to seed `t`. Nearest-first order already reaches that leaf before any
-//! node it could cull: on `cube` (256 rays per point) 9.61 nodes per ray with or without it,
-//! and one more leaf block tested, so it was 5–10 % slower.
-//!
-//! **The leaf blocks tested are about the fewest this tree allows** (2026-12-04). A census of
-//! every leaf block's box against 147 K cosine gather rays of `cube` (48² points × 64 rays,
-//! `--bvh high`; a temporary test, brute force over all boxes): the traversal tested 1.86
-//! blocks per ray, and a ray enters 0.96 boxes well before its hit (< 0.999 t) and 0.86 at its
-//! hit within rounding (mostly the hit's own block: the walls' blocks are flat), 1.83 in all;
-//! `hall` 1.43 tested against 0.47 + 0.04 + 0.87 = 1.38. So fewer leaf tests need tighter
-//! boxes, not another order, and smaller leaves do not give them: at most 4 triangles per
-//! block (the same 8-lane test, half filled) raised blocks per ray (`cube` `fast` 2.18 → 2.45,
-//! `hall` 1.84 → 1.91, `cargo bench --bench gather` at 128²) and bytes per triangle (72 →
-//! 128), at most 6 to 2.30 and 1.87; Mrays/s fell with both.
+//! So every traversal order (this one, a packet's, another BVH preset's) returns the same
+//! `(t, triangle)`.
 //!
 //! A hit's triangle index (`block_triangles`, another array than the block) is read only to
 //! break a tie of `t` and by callers that need it, not at every hit: a distance-only gather
-//! never reads it. On `cube` and `hall` that moved nothing beyond the noise (12 interleaved
-//! pairs of `gather_rays cast`, 2 threads, ×1.01 and ×0.97), but in a large scene the read is
-//! a cache miss per hit: on the 5.2 M-triangle sphere of `benches/embree/compare.sh` a profile
-//! (one thread) put 9.5 % of the traversal's samples on it, and the trace went from 3.47 s to
-//! 3.27 s (medians of 5 interleaved runs, 2 threads). There the rest of the traversal's time
-//! is the first loads of nodes (~31 %) and of leaf blocks (~22 %); on `cube` no single place
-//! (leaf blocks ~9 %, nodes ~5 %, the rest spread over box and triangle tests, sorting and
-//! the stacks).
+//! never reads it, and in a large scene that read is a cache miss per hit.
+//!
+//! The design, where a ray's time goes, and the dead ends measured and not kept (other visit
+//! orders, seeding `t`, a branch-free sort, smaller leaves): `docs/engine.md`.
 
 use std::mem::MaybeUninit;
 

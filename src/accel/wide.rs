@@ -6,27 +6,20 @@
 //! obvhs (PLOC, spatial splits, reinsertion: Meister & Bittner 2018, Meister et al. 2021).
 //! Which binary nodes become wide nodes is chosen by the least total area of wide nodes
 //! ([`super::slots`], Ylitie et al. 2017), from costs the SAH builder computes as it builds.
-//! That replaced the greedy collapse of Wald et al. 2008 (each wide node opens its
-//! largest-area inner child until it has eight, as Embree's BVH8 and tinybvh's `BVH8_CPU`
-//! do), which left the bottom of the tree to wide nodes of two to four leaves and traced
-//! 4–6 % slower on `cube` and `hall` and 13 % slower on the 5.2 M-triangle sphere. Nodes and leaf
-//! blocks are laid out in depth-first order, so a subtree's nodes are near each other. The
-//! collapse first walks the binary tree on one thread to fix that layout (which binary nodes
-//! become each wide node's children, where every node and block goes), then fills the leaf
-//! blocks on all threads, each into its place, then the nodes' boxes bottom-up: the same
-//! bytes for any thread count. On the 5.2 M-triangle sphere of `benches/embree/compare.sh`
-//! that took the whole build from 3.05 s to 2.37 s (medians of 5 interleaved runs, 2
-//! threads; with the SAH references also made in parallel). Collapsing the
-//! root's subtrees in parallel into vectors of their own and appending them was measured
-//! slower than one thread (3.3–3.6 s against 2.5–2.9 s), as each part's vectors grow and
-//! are copied again. Binning the top levels' references on several threads
-//! ([`super::sah`]) gained nothing measurable.
+//! Nodes and leaf blocks are laid out in depth-first order, so a subtree's nodes are near each
+//! other. The collapse first walks the binary tree on one thread to fix that layout (which
+//! binary nodes become each wide node's children, where every node and block goes), then
+//! fills the leaf blocks on all threads, each into its place, then the nodes' boxes
+//! bottom-up: the same bytes for any thread count.
 //!
 //! Boxes are computed here, bottom-up, from the triangles themselves, not taken from obvhs:
 //! with spatial splits obvhs clips a triangle's box at a split plane with rounded arithmetic,
 //! and a box a few ulps too small could let a ray through. A leaf's box is the union of its
 //! triangles' boxes, each cut to the (slightly widened) split box; without splits that is
 //! exactly the triangles' box.
+//!
+//! The layout's design, and the collapses measured and not kept (the greedy collapse of Wald
+//! et al. 2008, subtrees collapsed in parallel): `docs/engine.md`.
 
 use std::time::Duration;
 

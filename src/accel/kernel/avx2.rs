@@ -345,12 +345,9 @@ pub(crate) struct PacketLanes {
 /// same bits (tested: zeros of both signs, ties of magnitude, NaN and infinite components).
 /// Inlined into the packet traversal, so the lanes stay in registers rather than being
 /// gathered again from the [`RayData`], and the rays are written where the traversal reads
-/// them (built aside and returned, they were copied: ~50 instructions a ray).
-/// A timer profile (`perf`, one thread) put 3 % of the packet traversal on the load after
-/// the copy of a ray's origin, which read 8 bytes that two 4-byte stores had just written (a
-/// store that cannot be forwarded); reading each coordinate from the packet instead removed
-/// that load and changed nothing measurable (`render` of `cube` 256² × 256, 7 interleaved
-/// pairs: 1.503 against 1.502 s, 2026-12-05): the sample had landed on the wait, not caused it.
+/// them (built aside and returned, they were copied: ~50 instructions a ray). The load of a
+/// ray's origin just after its two 4-byte stores cannot be forwarded, and a profile puts a
+/// few percent of samples on it, but avoiding it measured no faster (`docs/engine.md`).
 ///
 /// # Safety
 /// The CPU must support AVX2: call it only from code compiled with it.

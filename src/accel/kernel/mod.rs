@@ -9,7 +9,8 @@
 //! rays. The kernel is chosen once, when the [`super::Accel`] is built: the fastest one the
 //! CPU has, or the one the caller names (`RenderOptions::kernel`, `Accel::for_work`). The
 //! CLI and Python take it from the environment variable `HMDIST_KERNEL` (`scalar`, `avx2`,
-//! `avx512`) with [`Kernel::from_env`]; the library itself never reads it.
+//! `avx512`) with [`Kernel::from_env`]; the library itself never reads it. The design, and
+//! what was measured and not kept: `docs/engine.md`.
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod avx2;
@@ -72,7 +73,7 @@ impl Kernel {
     }
 
     /// The fastest kernel this CPU has (AVX2: measured at least as fast as the AVX-512 build
-    /// on Zen 4; see the README's benchmark section).
+    /// on Zen 4; see `docs/engine.md`).
     pub fn best() -> Kernel {
         [Kernel::Avx2, Kernel::Scalar]
             .into_iter()
