@@ -118,6 +118,14 @@ impl RenderReport {
     pub fn to_json(&self) -> String {
         serde_json::to_string_pretty(self).expect("a report serialises")
     }
+
+    /// The report in the JSON file at `path` (a render's sidecar, a shard's, a cached
+    /// image's): the one place a report is read back, so every reader refuses the same way.
+    pub fn read(path: &std::path::Path) -> crate::error::Result<RenderReport> {
+        use crate::error::Error;
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, "read", e))?;
+        serde_json::from_str(&text).map_err(|e| Error::file(path, format!("not an hmdist render report: {e}")))
+    }
 }
 
 /// What a shard's report says about it.

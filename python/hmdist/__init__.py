@@ -48,7 +48,8 @@ def _quiet_headless_vulkan() -> None:
 _quiet_headless_vulkan()
 
 from . import _hmdist  # noqa: E402
-from ._hmdist import BUILTIN_SCENES, Camera, DeviceError, __version__  # noqa: E402
+from ._hmdist import (BUILTIN_SCENES, DEFAULT_RAYS, DEFAULT_SEED, DEFAULT_SIZE,  # noqa: E402
+                      Camera, DeviceError, __version__)
 
 __all__ = ["Scene", "Camera", "DeviceError", "f_diff", "read_exr", "BUILTIN_SCENES", "__version__"]
 
@@ -208,9 +209,9 @@ class Scene:
             raise ValueError(f"camera must be a hmdist.Camera, not {type(camera).__name__}")
         if camera is not None and size is not None:
             camera = Camera(camera.eye, camera.target, camera.up, camera.fov_y_deg, _size(size))
-        return self._inner.primary_hits(camera, (1024, 1024) if size is None else _size(size))
+        return self._inner.primary_hits(camera, DEFAULT_SIZE if size is None else _size(size))
 
-    def hmd_at(self, points: Vectors, normals: Vectors, rays: Count = 64, seed: Count = 1,
+    def hmd_at(self, points: Vectors, normals: Vectors, rays: Count = DEFAULT_RAYS, seed: Count = DEFAULT_SEED,
                keys: npt.ArrayLike | None = None, weighting: str = "cosine",
                max_distance: float | None = None, triangles: npt.ArrayLike | None = None,
                errors: Vectors | None = None, backend: str = "auto") -> Any:

@@ -9,6 +9,9 @@ import numpy.typing as npt
 
 __version__: str
 BUILTIN_SCENES: list[str]
+DEFAULT_RAYS: int
+DEFAULT_SEED: int
+DEFAULT_SIZE: tuple[int, int]
 
 class DeviceError(Exception): ...
 

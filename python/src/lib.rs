@@ -728,5 +728,9 @@ fn _hmdist(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("DeviceError", m.py().get_type::<DeviceError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("BUILTIN_SCENES", hmdist::scene::procedural::BUILTIN_NAMES.to_vec())?;
+    // The library's defaults, which the Python signatures take rather than repeat.
+    m.add("DEFAULT_RAYS", hmdist::estimators::gather::DEFAULT_RAYS)?;
+    m.add("DEFAULT_SEED", hmdist::render::DEFAULT_SEED)?;
+    m.add("DEFAULT_SIZE", hmdist::render::DEFAULT_SIZE)?;
     Ok(())
 }

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use hmdist::error::{Error, Result};
+use hmdist::error::Result;
 use hmdist::estimators::{Aov, AovImage};
 use hmdist::image::{exr, picture, OutputSet};
 use hmdist::report::RenderReport;
@@ -32,9 +32,7 @@ pub struct MergeArgs {
 /// A part's image, AOVs and report from its EXR and JSON.
 fn read_part(path: &std::path::Path) -> Result<Part> {
     let json = path.with_extension("json");
-    let text = std::fs::read_to_string(&json).map_err(|e| Error::io(&json, "read", e))?;
-    let report: RenderReport =
-        serde_json::from_str(&text).map_err(|e| Error::file(&json, format!("not a render report: {e}")))?;
+    let report = RenderReport::read(&json)?;
     let image = exr::read(path)?;
     // Channel 0 is Y, H itself.
     let aovs = report

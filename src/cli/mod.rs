@@ -118,8 +118,8 @@ pub fn describe(error: &Error) -> String {
 #[derive(clap::Args)]
 pub struct ImageArgs {
     /// Image size, WIDTHxHEIGHT.
-    #[arg(long, default_value = "1024x1024", value_parser = parse_size)]
-    size: (u32, u32),
+    #[arg(long, default_value_t = Size(hmdist::render::DEFAULT_SIZE), value_parser = parse_size)]
+    size: Size,
     /// Seed of the per-pixel random numbers: same seed, same image, whatever the thread count.
     #[arg(long, default_value_t = hmdist::render::DEFAULT_SEED)]
     seed: u64,
@@ -135,8 +135,8 @@ impl ImageArgs {
     /// The library's render options for these flags, with the kernel `HMDIST_KERNEL` names.
     fn options(&self) -> Result<hmdist::render::RenderOptions> {
         Ok(hmdist::render::RenderOptions {
-            width: self.size.0,
-            height: self.size.1,
+            width: self.size.0 .0,
+            height: self.size.0 .1,
             seed: self.seed,
             threads: self.threads,
             bvh_quality: self.bvh,
@@ -146,8 +146,19 @@ impl ImageArgs {
     }
 }
 
+/// An image size as `--size` spells it, `WIDTHxHEIGHT` (so that its default is the library's
+/// [`hmdist::render::DEFAULT_SIZE`], written once).
+#[derive(Clone, Copy, Debug)]
+struct Size((u32, u32));
+
+impl std::fmt::Display for Size {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}x{}", self.0 .0, self.0 .1)
+    }
+}
+
 /// `WIDTHxHEIGHT`, e.g. `1024x1024`.
-fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
+fn parse_size(s: &str) -> std::result::Result<Size, String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT, e.g. 1024x1024"))?;
@@ -156,7 +167,7 @@ fn parse_size(s: &str) -> std::result::Result<(u32, u32), String> {
             .parse::<u32>()
             .map_err(|_| format!("'{v}' in '{s}' is not a whole number"))
     };
-    Ok((parse(w)?, parse(h)?))
+    Ok(Size((parse(w)?, parse(h)?)))
 }
 
 #[cfg(test)]

@@ -27,7 +27,7 @@ pub struct BuildArgs {
     #[arg(long, default_value = "cube")]
     scene: String,
     /// Photon method the map is for: photon1 stores distances, photon2 next-hit points.
-    #[arg(long, default_value = "photon2", value_parser = ["photon1", "photon2"])]
+    #[arg(long, default_value = "photon2", value_parser = PhotonMethod::ALL.map(PhotonMethod::name))]
     method: String,
     #[command(flatten)]
     params: PhotonParams,
@@ -45,10 +45,7 @@ pub struct BuildArgs {
 
 pub fn run(command: PhotonsCommand) -> Result<()> {
     let PhotonsCommand::Build(args) = command;
-    let method = match args.method.as_str() {
-        "photon1" => PhotonMethod::StoredDistance,
-        _ => PhotonMethod::NextHitPoint,
-    };
+    let method = PhotonMethod::from_name(&args.method).expect("clap allows only the methods' names");
     if args.params.photon_map.is_some() {
         let message = "is what `photons build` writes (--out), not something it reads";
         return Err(Error::invalid("photon_map", message));

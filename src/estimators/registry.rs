@@ -350,4 +350,14 @@ mod tests {
         assert_eq!(cubemap.parameters().rays, Some(16));
         assert_eq!(cubemap.parameters().cubemap.unwrap().cube_res, 8);
     }
+
+    #[test]
+    fn the_photon_entries_are_named_as_their_methods() {
+        // PhotonMethod::name is the one mapping the CLI and the experiments use; the registry's
+        // entries must agree with it.
+        for m in PhotonMethod::ALL {
+            let built = method(m.name()).unwrap().build(&Map::new(), &[]).unwrap();
+            assert_eq!(built.method(), m.name());
+        }
+    }
 }

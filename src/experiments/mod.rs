@@ -645,14 +645,7 @@ impl<'a> Runner<'a> {
         let estimator = self.method_estimator("gather", &rays::reference_params(&self), &[])?;
         let stem = self.stem(estimator.as_ref(), REFERENCE_SEED, &[]);
         let json_path = exr_path.with_extension("json");
-        let text = std::fs::read_to_string(&json_path)
-            .map_err(|e| Error::io(&json_path, "read the reference's report", e))?;
-        let report: RenderReport = serde_json::from_str(&text).map_err(|e| {
-            Error::invalid(
-                "reference",
-                format!("{} is not an hmdist render report: {e}", json_path.display()),
-            )
-        })?;
+        let report = RenderReport::read(&json_path)?;
         let size = self.params.size;
         let checks: [(&str, String, String); 8] = [
             (
@@ -706,7 +699,8 @@ impl<'a> Runner<'a> {
             self.make_cache()?;
             let bytes = std::fs::read(exr_path).map_err(|e| Error::io(exr_path, "read", e))?;
             write_atomically(&cached_exr, &bytes)?;
-            write_atomically(&cached_json, text.as_bytes())?;
+            let json = std::fs::read(&json_path).map_err(|e| Error::io(&json_path, "read", e))?;
+            write_atomically(&cached_json, &json)?;
         }
         Ok(self)
     }
@@ -1155,7 +1149,7 @@ fn read_cached(
     aovs: &[Aov],
 ) -> Option<(HmdImage, RenderReport, Vec<HmdImage>)> {
     let image = exr::read(exr_path).ok()?;
-    let report: RenderReport = serde_json::from_str(&std::fs::read_to_string(json_path).ok()?).ok()?;
+    let report = RenderReport::read(json_path).ok()?;
     // The version is in the key; a report that says otherwise was not ours.
     if report.hmdist_version != env!("CARGO_PKG_VERSION") {
         return None;

@@ -23,11 +23,6 @@ const SHORT_PATHS: u32 = paper::BOUNCES[0];
 /// The paper's long paths (Table 4).
 const LONG_PATHS: u32 = paper::BOUNCES[1];
 
-/// Both photon methods, with their registry names.
-const METHODS: [(PhotonMethod, &str); 2] = [
-    (PhotonMethod::StoredDistance, "photon1"),
-    (PhotonMethod::NextHitPoint, "photon2"),
-];
 
 /// A photon method's configuration: `photons`, `k` gathered, `source`, `max_bounces`,
 /// others default.
@@ -96,9 +91,9 @@ pub fn table3(runner: &Runner) -> Result<Section> {
     for &photons in &p.photons {
         for &k in &p.gathers {
             let mut cells = vec![];
-            for (m, (_, method)) in METHODS.iter().enumerate() {
+            for (m, method) in PhotonMethod::ALL.iter().enumerate() {
                 let config = photon_config(photons, k, source, SHORT_PATHS);
-                let (image, report) = runner.method_image(method, &config, 1)?;
+                let (image, report) = runner.method_image(method.name(), &config, 1)?;
                 let d = f_diff(&reference, &image, l_diag)?;
                 sums[m] += d.value;
                 seconds[m] += report.seconds.phases.gather.unwrap_or(f64::NAN);
@@ -196,18 +191,18 @@ pub fn fig10(runner: &Runner) -> Result<Section> {
     })];
     let mut errors = vec![];
     let mut images = vec![];
-    for (_, method) in METHODS {
+    for method in PhotonMethod::ALL {
         let config = photon_config(photons, k, source, SHORT_PATHS);
-        let (image, report) = runner.method_image(method, &config, 1)?;
+        let (image, report) = runner.method_image(method.name(), &config, 1)?;
         let d = f_diff(&reference, &image, runner.scene.diagonal())?;
         errors.push(d.value);
         table.push(vec![
-            method.into(),
+            method.name().into(),
             format!("{:.4}", d.value),
             report.details.photon.map_or(0, |p| p.holes).to_string(),
         ]);
         tiles.push(Some(Tile {
-            caption: method.into(),
+            caption: method.name().into(),
             picture: grey(&image, s),
         }));
         images.push(image);
@@ -522,7 +517,7 @@ pub fn memory(runner: &Runner) -> Result<Section> {
         &["method", "hmdist", "paper"],
     );
     let published = [paper::BYTES_PER_PHOTON_METHOD1, paper::BYTES_PER_PHOTON_METHOD2];
-    for ((method, _), paper) in METHODS.iter().zip(published) {
+    for (method, paper) in PhotonMethod::ALL.iter().zip(published) {
         table.push(vec![
             method.name().into(),
             method.bytes_per_photon().to_string(),

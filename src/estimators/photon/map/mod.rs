@@ -49,12 +49,21 @@ pub enum PhotonMethod {
 }
 
 impl PhotonMethod {
-    /// The name the CLI and the report use (`photon1`, `photon2`).
+    /// Both methods, I then II.
+    pub const ALL: [PhotonMethod; 2] = [PhotonMethod::StoredDistance, PhotonMethod::NextHitPoint];
+
+    /// The name the CLI and the report use (`photon1`, `photon2`): the one mapping between
+    /// the two (the registry's entries are named so; a test holds them to it).
     pub fn name(self) -> &'static str {
         match self {
             PhotonMethod::StoredDistance => "photon1",
             PhotonMethod::NextHitPoint => "photon2",
         }
+    }
+
+    /// The method named `name` ([`PhotonMethod::name`]), if any.
+    pub fn from_name(name: &str) -> Option<PhotonMethod> {
+        PhotonMethod::ALL.into_iter().find(|m| m.name() == name)
     }
 
     /// Payload bytes per photon: the normal and the method's distance or next-hit point.
