@@ -244,7 +244,9 @@ fn fingerprint(
 
 /// The key of `scene` rendered by `estimator` with `options` through BVH preset `bvh`
 /// (resolved), whose estimate reported `details` (where it ran, the `ao` radius);
-/// `scene_content` is [`Scene::fingerprint`].
+/// `scene_content` is [`Scene::fingerprint`]. The same [`RenderKey`] names an image in the
+/// experiment cache (with the backend and preset as asked for) and checks a photon map file
+/// (with what the map depends on), by its [`RenderKey::digest`].
 fn render_key(
     scene: &Scene,
     scene_content: u64,

@@ -168,12 +168,13 @@ pub struct RenderKey {
     /// The method's parameters, as the report writes them.
     #[serde(flatten)]
     pub parameters: Parameters,
-    /// Where it ran: `cpu` or `gpu` (resolved: never `auto`).
+    /// Where it ran: `cpu` or `gpu` (resolved: never `auto`). The experiment cache, which
+    /// keys an image before it is rendered, puts the backend it asks for (`auto` too).
     pub backend: String,
     /// The GPU adapter's class, `hardware` or `software`; `null` on the CPU. (Hardware and
     /// software GPUs round differently in the last bits.)
     pub adapter_class: Option<String>,
-    /// The BVH preset built (resolved: never `auto`).
+    /// The BVH preset built (resolved: never `auto`; the experiment cache: as asked for).
     pub bvh: String,
     /// Image width in pixels.
     pub width: u32,
@@ -190,6 +191,15 @@ pub struct RenderKey {
 }
 
 impl RenderKey {
+    /// A stable 64-bit hash of every field (its JSON, fields in declaration order): what the
+    /// experiment cache names an image by and a photon map file is checked by. The one set of
+    /// fields that determines an image is this struct's; everything that keys an image builds
+    /// one (the render driver, the experiment cache, the photon map), so a field added here
+    /// is a field every key has.
+    pub fn digest(&self) -> u64 {
+        crate::scene::stable_hash(serde_json::to_string(self).expect("a key serialises").as_bytes())
+    }
+
     /// The fields whose values differ from `other`'s, each as `name (this value against
     /// other's)`, in alphabetical order; empty where the keys are equal.
     pub fn differences(&self, other: &RenderKey) -> Vec<String> {

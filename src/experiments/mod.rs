@@ -36,7 +36,7 @@ use crate::estimators::{registry, Aov, AovImage, Backend, CubemapParams, Estimat
 use crate::image::{exr, write_atomically, HmdImage};
 use crate::progress::{Progress, Silent};
 use crate::render::{render, RenderOptions};
-use crate::report::RenderReport;
+use crate::report::{RenderKey, RenderReport};
 use crate::scene::{stable_hash, Scene};
 use crate::shard::Shard;
 pub use plan::Plan;
@@ -250,9 +250,11 @@ pub struct Section {
 pub struct Runner<'a> {
     /// The scene.
     pub scene: Scene,
-    /// Identifies the scene in cache keys: hmdist's version, the scene's name and the
-    /// fingerprint of its content.
+    /// Identifies the scene in the cache's older keys ([`Runner::legacy_stem`]): hmdist's
+    /// version, the scene's name and the fingerprint of its content.
     scene_key: String,
+    /// The fingerprint of the scene's content ([`Scene::fingerprint`]), for the cache keys.
+    scene_content: u64,
     /// How much work.
     pub preset: Preset,
     /// The preset's sizes and counts.
@@ -322,15 +324,12 @@ impl<'a> Runner<'a> {
     /// A runner for the scene `scene_arg` names (built-in or file), writing into `out`.
     pub fn new(scene_arg: &str, preset: Preset, out: &Path, progress: &'a dyn Progress) -> Result<Self> {
         let scene = Scene::load(scene_arg)?;
-        let scene_key = format!(
-            "{}|{}|{:016x}",
-            env!("CARGO_PKG_VERSION"),
-            scene.name,
-            scene.fingerprint()
-        );
+        let scene_content = scene.fingerprint();
+        let scene_key = format!("{}|{}|{scene_content:016x}", env!("CARGO_PKG_VERSION"), scene.name);
         Ok(Runner {
             scene,
             scene_key,
+            scene_content,
             preset,
             params: preset.params(),
             out: out.to_path_buf(),
@@ -900,8 +899,41 @@ impl<'a> Runner<'a> {
     }
 
     /// The cache stem of the image `estimator` renders with `seed` and `aovs` at the preset's
-    /// size: a hash of everything that determines it.
+    /// size: the method and the [`RenderKey::digest`] of the image's key as this run asks for
+    /// it (the backend and BVH preset as requested: `auto` stays `auto`), the key `merge`
+    /// compares and photon maps are checked by. An image cached under the key of earlier
+    /// versions ([`Runner::legacy_stem`]) is renamed to this one when first asked for, so
+    /// caches on disk stay usable.
     fn stem(&self, estimator: &dyn Estimator, seed: u64, aovs: &[Aov]) -> String {
+        let options = self.render_options(seed, aovs);
+        let key = RenderKey {
+            hmdist_version: env!("CARGO_PKG_VERSION").into(),
+            scene: self.scene.name.clone(),
+            scene_content: format!("{:016x}", self.scene_content),
+            method: estimator.method().into(),
+            parameters: estimator.parameters(),
+            backend: serde_json::to_value(self.backend)
+                .ok()
+                .and_then(|v| v.as_str().map(String::from))
+                .unwrap_or_default(),
+            adapter_class: None,
+            bvh: options.bvh_quality.name().into(),
+            width: options.width,
+            height: options.height,
+            seed,
+            max_distance: options.max_distance,
+            aovs: aovs.iter().map(|a| a.name().into()).collect(),
+            ao_radius: None,
+        };
+        let stem = format!("{}-{:016x}", estimator.method(), key.digest());
+        self.adopt_legacy(&self.legacy_stem(estimator, seed, aovs), &stem);
+        stem
+    }
+
+    /// The cache stem earlier versions gave the image: a hash of the scene's key, the method,
+    /// its parameters, the size, the seed, the backend as requested and the AOVs. Read only, to
+    /// find images cached before [`Runner::stem`]'s key.
+    fn legacy_stem(&self, estimator: &dyn Estimator, seed: u64, aovs: &[Aov]) -> String {
         let size = self.params.size;
         let parameters = serde_json::to_string(&estimator.parameters()).expect("parameters serialise");
         let mut key = format!(
@@ -914,6 +946,21 @@ impl<'a> Runner<'a> {
             key += &format!("|{}", aov.name());
         }
         format!("{}-{:016x}", estimator.method(), stable_hash(key.as_bytes()))
+    }
+
+    /// Renames the cached files of `legacy` (the image, and any of its parts) to `stem`'s,
+    /// where `stem` has none: the EXR first, then the JSON that marks it cached.
+    fn adopt_legacy(&self, legacy: &str, stem: &str) {
+        let names = std::iter::once((legacy.to_string(), stem.to_string())).chain(
+            (0..PARTS).map(|k| (Self::part_stem(legacy, k, PARTS), Self::part_stem(stem, k, PARTS))),
+        );
+        for (old, new) in names {
+            let ((old_exr, old_json), (new_exr, new_json)) = (self.cache_paths(&old), self.cache_paths(&new));
+            if old_json.exists() && !new_json.exists() {
+                let _ = std::fs::rename(&old_exr, &new_exr);
+                let _ = std::fs::rename(&old_json, &new_json);
+            }
+        }
     }
 
     /// Writes a rendered image and its report into the cache as `stem`: the JSON last, so
@@ -1215,6 +1262,43 @@ mod tests {
         // An image rendered whole by this run owes nothing to an earlier one.
         runner.first_look("another", None);
         assert_eq!(runner.first_looks.borrow()["another"], None);
+        let _ = std::fs::remove_dir_all(&out);
+    }
+
+    /// An image cached under the key of earlier versions (the whole image, or its parts) is
+    /// found, not rendered again, and takes the new key's name.
+    #[test]
+    fn an_image_cached_under_the_old_key_is_found() {
+        let out = std::env::temp_dir().join(format!("hmdist-legacy-key-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&out);
+        let runner = || {
+            Runner::new("slab", Preset::Quick, &out, &Silent)
+                .unwrap()
+                .with_size(Some(16))
+                .unwrap()
+                .with_backend(Backend::Cpu)
+        };
+        let first = runner();
+        let estimator = first
+            .method_estimator("gather", &serde_json::json!({ "rays": 8 }), &[])
+            .unwrap();
+        let (_, report) = first.image(estimator.as_ref(), 1).unwrap();
+        let (stem, legacy) = (
+            first.stem(estimator.as_ref(), 1, &[]),
+            first.legacy_stem(estimator.as_ref(), 1, &[]),
+        );
+        assert_ne!(stem, legacy, "the key changed");
+        // As an earlier version would have left it: the image under the old name, and a part
+        // of another image under its old name.
+        let (new_exr, new_json) = first.cache_paths(&stem);
+        let (old_exr, old_json) = first.cache_paths(&legacy);
+        std::fs::rename(&new_exr, &old_exr).unwrap();
+        std::fs::rename(&new_json, &old_json).unwrap();
+        let second = runner();
+        let (_, found) = second.image(estimator.as_ref(), 1).unwrap();
+        // A render again would have taken other seconds.
+        assert_eq!(found.seconds.total.to_bits(), report.seconds.total.to_bits());
+        assert!(new_json.exists() && !old_json.exists(), "renamed to the new key");
         let _ = std::fs::remove_dir_all(&out);
     }
 }

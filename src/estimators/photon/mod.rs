@@ -23,7 +23,7 @@ use crate::error::{Error, Result};
 use crate::options::{in_pool, RenderOptions};
 use crate::progress::Progress;
 pub use crate::report::SourceKind;
-use crate::report::{Details, Parameters, PhaseSeconds, PhotonDetails, PhotonParameters};
+use crate::report::{Details, Parameters, PhaseSeconds, PhotonDetails, PhotonParameters, RenderKey};
 use crate::scene::Scene;
 pub use map::{GatherScratch, MapHeader, PhotonMap, PhotonMethod};
 pub use trace::{trace_photons, PathRules, PhotonSource, PhotonTrace, TracedPhoton};
@@ -184,22 +184,43 @@ impl PhotonEstimator {
 
 impl PhotonEstimator {
     /// The fingerprint of this estimator's map for `scene` with `seed`, traced through BVH
-    /// preset `bvh` (resolved), for images of `size` (which camera-sourced photons depend on).
+    /// preset `bvh` (resolved), for images of `size` (which camera-sourced photons depend on):
+    /// the [`RenderKey::digest`] of the map's key, the render key with what the map depends on
+    /// (the scene's content, not its name; the photon method, count, source, bounces and
+    /// absorption, not K; the size only for camera-sourced photons).
     pub fn map_fingerprint(&self, scene: &Scene, seed: u64, size: (u32, u32), bvh: BuildQuality) -> u64 {
+        /// The photon parameters a map depends on.
+        #[derive(serde::Serialize)]
+        struct MapParameters {
+            photons: usize,
+            source: SourceKind,
+            max_bounces: u32,
+            absorption: f32,
+        }
         let p = &self.params;
-        let size = (p.source == SourceKind::Camera).then_some(size);
-        let key = format!(
-            "{}|{:016x}|{}|{}|{}|{}|{}|{seed}|{size:?}|{}",
-            env!("CARGO_PKG_VERSION"),
-            scene.fingerprint(),
-            self.method.name(),
-            p.photons,
-            p.source.name(),
-            p.max_bounces,
-            p.absorption.to_bits(),
-            bvh.name()
-        );
-        crate::scene::stable_hash(key.as_bytes())
+        let (width, height) = if p.source == SourceKind::Camera { size } else { (0, 0) };
+        let key = RenderKey {
+            hmdist_version: env!("CARGO_PKG_VERSION").into(),
+            scene: String::new(),
+            scene_content: format!("{:016x}", scene.fingerprint()),
+            method: self.method.name().into(),
+            parameters: Parameters::of(&MapParameters {
+                photons: p.photons,
+                source: p.source,
+                max_bounces: p.max_bounces,
+                absorption: p.absorption,
+            }),
+            backend: "cpu".into(),
+            adapter_class: None,
+            bvh: bvh.name().into(),
+            width,
+            height,
+            seed,
+            max_distance: None,
+            aovs: vec![],
+            ao_radius: None,
+        };
+        key.digest()
     }
 
     /// Traces and indexes the photon map that a render of `scene` with `options` (its size,
