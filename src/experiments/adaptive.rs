@@ -6,7 +6,9 @@
 
 use super::plot::{log_log, Series};
 use super::rays::reference;
-use super::{Runner, Section, Table};
+use super::runner::Runner;
+use super::section::Section;
+use super::table::Table;
 use crate::error::Result;
 use crate::estimators::{AdaptiveParams, Aov, GatherParams};
 use crate::image::picture::{encode_png, false_colour_scaled, ColourScale};

@@ -11,7 +11,9 @@
 use super::paper::{self, PaperScene};
 use super::photons::default_source;
 use super::plot::{log_log_with, Marks, Series};
-use super::{Runner, Section, Table};
+use super::runner::Runner;
+use super::section::Section;
+use super::table::Table;
 use crate::error::Result;
 
 /// One image's accuracy and cost.

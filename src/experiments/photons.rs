@@ -8,7 +8,9 @@ use super::grid::{crop, windows_differing_most, write_grid, Tile};
 use super::paper;
 use super::plot::{log_log_beside_paper, Series};
 use super::rays::reference;
-use super::{Runner, Section, Table};
+use super::runner::Runner;
+use super::section::Section;
+use super::table::Table;
 use crate::accel::{Accel, BuildQuality};
 use crate::error::Result;
 use crate::estimators::photon::{

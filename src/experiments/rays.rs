@@ -4,7 +4,10 @@
 use super::grid::{write_grid, Tile};
 use super::paper;
 use super::plot::{log_log_beside_paper, Series};
-use super::{Runner, Section, Table, REFERENCE_SEED};
+use super::presets::REFERENCE_SEED;
+use super::runner::Runner;
+use super::section::Section;
+use super::table::Table;
 use crate::error::Result;
 use crate::estimators::cubemap::GpuFill;
 use crate::estimators::{CubemapParams, GatherParams};
@@ -84,15 +87,10 @@ fn cubemap_params(runner: &Runner, rays: u32) -> CubemapParams {
     }
 }
 
-/// The reference image's parameters: gather with the preset's reference ray count.
-pub(super) fn reference_params(runner: &Runner) -> GatherParams {
-    gather_params(runner.params.reference_rays)
-}
-
-/// The reference image: gather with [`reference_params`], its own seed.
+/// The reference image: gather with [`Runner::reference_params`], its own seed.
 pub(super) fn reference(runner: &Runner) -> Result<HmdImage> {
     Ok(runner
-        .method_image("gather", &reference_params(runner), REFERENCE_SEED)?
+        .method_image("gather", &runner.reference_params(), REFERENCE_SEED)?
         .0)
 }
 

@@ -3,7 +3,8 @@
 
 use std::fmt::Write as _;
 
-use super::{Runner, Table};
+use super::runner::Runner;
+use super::table::Table;
 use crate::error::Result;
 use crate::image::write_atomically;
 
