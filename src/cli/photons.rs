@@ -34,7 +34,7 @@ pub struct BuildArgs {
     /// The renders' size, seed and BVH preset: camera-sourced photons depend on the size,
     /// and the BVH preset is chosen by it.
     #[command(flatten)]
-    image: super::ImageArgs,
+    image: super::image_args::ImageArgs,
     /// The map file.
     #[arg(long, default_value = "photons.map")]
     out: PathBuf,

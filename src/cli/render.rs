@@ -29,7 +29,7 @@ pub struct RenderArgs {
     #[command(flatten)]
     method_flags: MethodFlags,
     #[command(flatten)]
-    image: super::ImageArgs,
+    image: super::image_args::ImageArgs,
     /// Clamp distances at D; escaping rays then count as D [default: no clamp].
     #[arg(long, value_name = "D")]
     max_distance: Option<f32>,

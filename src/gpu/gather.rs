@@ -156,7 +156,7 @@ pub(crate) fn gather_points<T>(
         .min(device.limits.max_buffer_size);
     let per_point = (rounds as u64 * 8).max(std::mem::size_of::<[[f32; 4]; 4]>() as u64);
     let batch_points = batch_points.min((largest / per_point).max(1) as usize);
-    crate::gpu::check_buffers(
+    super::device::check_buffers(
         device,
         "the GPU gather",
         &[

@@ -127,13 +127,13 @@ impl HemicubeGpu {
     /// [`crate::gpu`]). A software rasteriser (Mesa's lavapipe) is taken only when
     /// `allow_software`.
     pub fn open(allow_software: bool) -> Result<HemicubeGpu> {
-        let super::Device {
+        let super::device::Device {
             device,
             queue,
             adapter_name,
             limits,
             software: device_software,
-        } = super::Device::open("hmdist hemicubes", allow_software, wgpu::Features::CLIP_DISTANCES)?;
+        } = super::device::Device::open("hmdist hemicubes", allow_software, wgpu::Features::CLIP_DISTANCES)?;
         Ok(HemicubeGpu {
             device,
             queue,
@@ -169,7 +169,7 @@ pub(crate) fn look_up(
         ("cubes", capacity * std::mem::size_of::<Cube>()),
         ("results", capacity * std::mem::size_of::<LookupResult>()),
     ];
-    super::check_buffers_within(&gpu.limits, &gpu.adapter_name, what, &storage)?;
+    super::device::check_buffers_within(&gpu.limits, &gpu.adapter_name, what, &storage)?;
     // Vertex and index buffers are not storage bindings: only the buffer size limit applies.
     let unbound = wgpu::Limits {
         max_storage_buffer_binding_size: gpu.limits.max_buffer_size,
@@ -179,9 +179,9 @@ pub(crate) fn look_up(
         ("vertices", mesh.positions.len() * 12),
         ("indices", mesh.indices.len() * 12),
     ];
-    super::check_buffers_within(&unbound, &gpu.adapter_name, what, &geometry)?;
+    super::device::check_buffers_within(&unbound, &gpu.adapter_name, what, &geometry)?;
     // Catch the device's errors here rather than let wgpu panic on them.
-    super::checked(&gpu.device, "the cube-map pipeline", || {
+    super::device::checked(&gpu.device, "the cube-map pipeline", || {
         look_up_in_batches(gpu, job, starts, key, progress, atlas_size, (cols, capacity))
     })
 }

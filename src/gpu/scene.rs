@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 
-use super::Device;
+use super::device::Device;
 use crate::accel::wide::{WideBvh, EMPTY, LEAF, WIDTH};
 use crate::accel::Accel;
 use crate::error::Result;
@@ -61,7 +61,7 @@ impl GpuScene {
             ("triangles", std::mem::size_of_val(&triangles[..])),
             ("locations", std::mem::size_of_val(location)),
         ];
-        crate::gpu::check_buffers(&device, "the BVH", &buffers)?;
+        super::device::check_buffers(&device, "the BVH", &buffers)?;
         let stack = (WIDTH - 1) * wide.depth + 1;
         let traverse = traverse_source(stack);
         let (gather, trace, bvh) = device.checked("uploading the scene to the GPU", || {
@@ -192,7 +192,7 @@ impl GpuScene {
         groups: &[wgpu::BindGroup; 2],
         invocations: u32,
     ) {
-        let (x, y) = super::workgroups(
+        let (x, y) = super::device::workgroups(
             invocations,
             self.device.limits.max_compute_workgroups_per_dimension,
         );
@@ -219,7 +219,7 @@ pub(crate) fn traverse_source(stack: usize) -> String {
         ("LEAF", format!("{LEAF:#x}u")),
         ("EMPTY", format!("{EMPTY:#x}u")),
     ];
-    super::inject_constants(include_str!("traverse.wgsl"), &constants)
+    super::device::inject_constants(include_str!("traverse.wgsl"), &constants)
 }
 
 /// The BVH in `traverse.wgsl`'s layout: [`NODE_VEC4S`] vec4s per node, three vec4s per block
@@ -262,4 +262,24 @@ fn flatten(wide: &WideBvh) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
         }
     }
     (nodes, triangles)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_traversal_takes_the_hosts_layout_constants() {
+        let source = traverse_source(21);
+        for line in [
+            "const STACK_SIZE: u32 = 21u;",
+            "const NODE_VEC4S: u32 = 14u;",
+            "const WIDTH: u32 = 8u;",
+            "const LEAF: u32 = 0x80000000u;",
+            "const EMPTY: u32 = 0xffffffffu;",
+        ] {
+            assert!(source.lines().any(|l| l == line), "{line} missing");
+        }
+        naga::front::wgsl::parse_str(&source).unwrap();
+    }
 }
