@@ -314,26 +314,11 @@ fn parent_child_pairs(files: &BTreeMap<Module, PathBuf>) -> Vec<String> {
         .collect()
 }
 
-/// The parent ↔ child pairs that predate this check, each to be taken apart (issue #53); the
-/// list only shrinks.
-const KNOWN_PARENT_CHILD_PAIRS: &[&str] = &[
-    "src/estimators/cubemap/mod.rs and src/estimators/cubemap/cpu.rs",
-    "src/scene/mod.rs and src/scene/load/mod.rs",
-    "src/scene/mod.rs and src/scene/procedural/mod.rs",
-    "src/scene/load/mod.rs and src/scene/load/gltf.rs",
-    "src/scene/load/mod.rs and src/scene/load/obj.rs",
-    "src/scene/load/mod.rs and src/scene/load/ply.rs",
-    "src/scene/load/mod.rs and src/scene/load/toml.rs",
-];
-
 #[test]
 fn no_parent_and_child_import_each_other() {
     let files = modules(&src());
-    let found = parent_child_pairs(&files);
-    let new: Vec<&String> = found.iter().filter(|p| !KNOWN_PARENT_CHILD_PAIRS.contains(&p.as_str())).collect();
-    assert!(new.is_empty(), "a parent and a child that import each other:\n{new:?}");
-    let gone: Vec<&&str> = KNOWN_PARENT_CHILD_PAIRS.iter().filter(|k| !found.iter().any(|f| f == *k)).collect();
-    assert!(gone.is_empty(), "taken apart: remove from KNOWN_PARENT_CHILD_PAIRS: {gone:?}");
+    let pairs = parent_child_pairs(&files);
+    assert!(pairs.is_empty(), "a parent and a child that import each other:\n{}", pairs.join("\n"));
 }
 
 /// The checks see what they must: a made-up pair of files that import each other is a

@@ -9,6 +9,7 @@ pub mod export;
 pub mod light;
 pub mod load;
 pub mod mesh;
+pub mod model;
 pub mod procedural;
 
 use std::path::Path;
@@ -16,23 +17,9 @@ use std::path::Path;
 pub use camera::{Camera, CameraRays};
 pub use light::SpotLight;
 pub use mesh::{Bounds, Mesh};
+pub use model::{default_display_scale, framing_camera, stable_hash, Scene};
 
 use crate::error::Result;
-
-/// Everything an estimator needs to render an HMD image of a scene.
-#[derive(Clone, Debug)]
-pub struct Scene {
-    /// A short name for reports: the built-in name or the file name.
-    pub name: String,
-    /// The triangles, in scene units.
-    pub mesh: Mesh,
-    /// The camera the HMD image is rendered from.
-    pub camera: Camera,
-    /// The spot light for light-sourced photons, where the scene has one.
-    pub light: Option<SpotLight>,
-    /// Grey level per unit of H in pictures: grey = clamp(display_scale · H) (SPEC §4).
-    pub display_scale: f32,
-}
 
 impl Scene {
     /// Every file [`Scene::load`] of `name_or_path` reads: none for a built-in scene; the file
@@ -55,73 +42,4 @@ impl Scene {
         scene.validate()?;
         Ok(scene)
     }
-
-    /// Checks that the scene can be rendered: see [`Mesh::validate`] and [`Camera::validate`].
-    pub fn validate(&self) -> Result<()> {
-        self.mesh.validate()?;
-        self.camera.validate()
-    }
-
-    /// Bounds of the vertices that triangles use ([`Mesh::bounds`]).
-    pub fn bounds(&self) -> Bounds {
-        self.mesh.bounds()
-    }
-
-    /// `l_diag`: the length of the bounding-box diagonal (SPEC §1, §4).
-    pub fn diagonal(&self) -> f32 {
-        self.bounds().diagonal()
-    }
-
-    /// A hash of everything in the scene that a render depends on: the vertices and triangles,
-    /// the camera, the spot light and the display scale (not the name). The same on every
-    /// machine; it changes when any file a scene was loaded from changes what was loaded.
-    pub fn fingerprint(&self) -> u64 {
-        let mut floats: Vec<f32> = self.mesh.positions.iter().flat_map(|p| p.to_array()).collect();
-        let c = &self.camera;
-        floats.extend(
-            c.eye
-                .to_array()
-                .into_iter()
-                .chain(c.target.to_array())
-                .chain(c.up.to_array()),
-        );
-        floats.extend([c.fov_y_deg, self.display_scale]);
-        if let Some(l) = &self.light {
-            floats.extend(l.position.to_array().into_iter().chain(l.direction.to_array()));
-            floats.push(l.cone_half_angle_deg);
-        }
-        let words = floats
-            .iter()
-            .map(|f| f.to_bits())
-            .chain([self.light.is_some() as u32])
-            .chain(self.mesh.indices.iter().flatten().copied());
-        stable_hash(&words.flat_map(u32::to_le_bytes).collect::<Vec<u8>>())
-    }
-}
-
-/// FNV-1a, 64-bit: a hash that is the same in every build and on every machine.
-pub fn stable_hash(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
-        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
-    })
-}
-
-/// A camera for a file that has none: looking at the centre of `bounds` from the front
-/// (+z), slightly above, far enough out to see all of it with a 50° field of view.
-pub fn framing_camera(bounds: Bounds) -> Camera {
-    let center = bounds.center();
-    let radius = 0.5 * bounds.diagonal().max(f32::MIN_POSITIVE);
-    let distance = radius / (25f32.to_radians()).sin();
-    let toward_eye = glam::Vec3::new(0.0, 0.3, 1.0).normalize();
-    Camera {
-        eye: center + distance * toward_eye,
-        target: center,
-        up: glam::Vec3::Y,
-        fov_y_deg: 50.0,
-    }
-}
-
-/// Display scale for a scene that names none: grey 0.5 at a quarter of the diagonal.
-pub fn default_display_scale(bounds: Bounds) -> f32 {
-    2.0 / bounds.diagonal().max(f32::MIN_POSITIVE)
 }

@@ -22,7 +22,8 @@ use std::time::Instant;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::{Cubemap, Hemicube};
+use super::hemicube::Hemicube;
+use super::params::Cubemap;
 use crate::accel::{Hit, RayCaster, PACKET};
 use crate::error::Result;
 use crate::estimators::{

@@ -20,7 +20,7 @@ use ::gltf::mesh::Mode;
 use ::gltf::{accessor::DataType, accessor::Dimensions, buffer, camera::Projection};
 use glam::{Affine3A, Mat4, Vec3};
 
-use super::MeshFile;
+use super::common::MeshFile;
 use crate::error::{catch_file_panic, Error, Result};
 use crate::scene::{Camera, Mesh, SpotLight};
 

@@ -13,59 +13,21 @@
 //! bytes, already read (the fuzz targets in `fuzz/` call them); the path then gives the
 //! format, the name in errors and the folder of the files the file refers to.
 
+mod common;
 mod gltf;
+mod meshes;
 mod obj;
 mod ply;
 mod toml;
 
+pub use common::MeshFile;
+pub use meshes::{load_mesh, load_mesh_bytes};
+
 use std::path::Path;
 
-use crate::error::{Error, Result};
-use crate::scene::{default_display_scale, framing_camera, Camera, Mesh, Scene, SpotLight};
-
-/// What a mesh file holds: its triangles, and the camera and spot light where the format can
-/// carry them (glTF). Positions are in the file's world space (node transforms applied).
-#[derive(Clone, Debug, Default)]
-pub struct MeshFile {
-    /// The triangles, in world space.
-    pub mesh: Mesh,
-    /// The first perspective camera of a glTF file; `None` for OBJ and PLY.
-    pub camera: Option<Camera>,
-    /// The first spot light of a glTF file (`KHR_lights_punctual`); `None` for OBJ and PLY.
-    pub light: Option<SpotLight>,
-}
-
-/// The file formats hmdist reads, by extension.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Format {
-    Obj,
-    Ply,
-    Gltf,
-    SceneToml,
-}
-
-fn format_of(path: &Path) -> Result<Format> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    match ext.as_str() {
-        "obj" => Ok(Format::Obj),
-        "ply" => Ok(Format::Ply),
-        "gltf" | "glb" => Ok(Format::Gltf),
-        "toml" => Ok(Format::SceneToml),
-        _ => {
-            let format = if ext.is_empty() {
-                "no extension".to_string()
-            } else {
-                format!("'.{ext}'")
-            };
-            let message = format!("unknown scene format {format}: expected .obj, .ply, .gltf, .glb or .toml");
-            Err(Error::file(path, message))
-        }
-    }
-}
+use crate::error::Result;
+use crate::scene::model::{default_display_scale, framing_camera, Scene};
+use common::{file_name, format_of, in_file, read_bytes, Format};
 
 /// Loads a scene file: a mesh file (with a framing camera unless it carries one) or a TOML
 /// scene description. The result passes [`Scene::validate`].
@@ -94,42 +56,6 @@ pub fn load_bytes(path: &Path, bytes: &[u8]) -> Result<Scene> {
     Ok(scene)
 }
 
-/// Loads a mesh file (OBJ, PLY, glTF/GLB). The mesh is checked: it has triangles, every
-/// index is in range and every used vertex is finite.
-pub fn load_mesh(path: &Path) -> Result<MeshFile> {
-    format_of(path)?;
-    load_mesh_bytes(path, &read_bytes(path)?)
-}
-
-/// [`load_mesh`] of the file at `path` whose bytes are `bytes`.
-pub fn load_mesh_bytes(path: &Path, bytes: &[u8]) -> Result<MeshFile> {
-    let file = match format_of(path)? {
-        Format::Obj => obj::load(path, bytes)?,
-        Format::Ply => ply::load(path, bytes)?,
-        Format::Gltf => gltf::load(path, bytes)?,
-        Format::SceneToml => {
-            return Err(Error::file(
-                path,
-                "a TOML scene description cannot be used as a mesh: expected .obj, .ply, .gltf or .glb",
-            ))
-        }
-    };
-    file.mesh.validate().map_err(|e| in_file(path, e))?;
-    Ok(file)
-}
-
-/// The name a scene loaded from `path` goes by in reports: its file name.
-fn file_name(path: &Path) -> String {
-    path.file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| path.display().to_string())
-}
-
-/// Reads the whole file, with the error phrased for a person.
-fn read_bytes(path: &Path) -> Result<Vec<u8>> {
-    crate::files::read_regular(path)
-}
-
 /// Every file that loading the scene file at `path` reads: the file, and a TOML scene's
 /// meshes (as far as the file can be read; a file that cannot fails its load anyway).
 pub fn files_read(path: &Path) -> Vec<std::path::PathBuf> {
@@ -138,20 +64,4 @@ pub fn files_read(path: &Path) -> Vec<std::path::PathBuf> {
         files.extend(toml::mesh_paths(path, &bytes));
     }
     files
-}
-
-/// Turns a geometry error ("the scene has no triangles") into one that names the file.
-fn in_file(path: &Path, err: Error) -> Error {
-    match err {
-        Error::Scene(message) => Error::file(path, message),
-        other => other,
-    }
-}
-
-/// The 1-based line of byte `offset` in `text`.
-fn line_of_offset(text: &[u8], offset: usize) -> usize {
-    1 + text[..offset.min(text.len())]
-        .iter()
-        .filter(|&&b| b == b'\n')
-        .count()
 }

@@ -21,7 +21,7 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use super::{line_of_offset, MeshFile};
+use super::common::{line_of_offset, MeshFile};
 use crate::error::{catch_file_panic, Error, Result};
 use crate::scene::Mesh;
 

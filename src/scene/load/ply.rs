@@ -17,7 +17,7 @@ use glam::Vec3;
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{Encoding, Header, Payload, Property, PropertyAccess, PropertyAccessResult};
 
-use super::{line_of_offset, MeshFile};
+use super::common::{line_of_offset, MeshFile};
 use crate::error::{catch_file_panic, Error, Result};
 use crate::scene::Mesh;
 

@@ -29,7 +29,8 @@ use ::toml::Spanned;
 use glam::{Affine3A, Quat, Vec3};
 use serde::Deserialize;
 
-use super::{file_name, line_of_offset, load_mesh};
+use super::common::{file_name, line_of_offset};
+use super::meshes::load_mesh;
 use crate::error::{Error, Result};
 use crate::scene::{default_display_scale, framing_camera, Camera, Mesh, Scene, SpotLight};
 

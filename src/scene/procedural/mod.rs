@@ -9,7 +9,7 @@ pub mod hall;
 pub mod shapes;
 pub mod validation;
 
-use super::Scene;
+use super::model::Scene;
 
 /// Names accepted by [`builtin`], in the order `--help` lists them.
 pub const BUILTIN_NAMES: [&str; 5] = ["cube", "hall", "sphere", "slab", "dome"];
