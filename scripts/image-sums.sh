@@ -22,9 +22,12 @@ for scene in cube hall; do
     render "$scene-gather-aov" --scene "$scene" --method gather --rays 64 --backend cpu \
         --aov relerr,rays,dmin,ao,escaped --ao-radius 1
     render "$scene-gather-fast" --scene "$scene" --method gather --rays 64 --backend cpu --bvh fast
+    render "$scene-gather-sobol" --scene "$scene" --method gather --rays 64 --backend cpu --sampler sobol --rounds 2
     render "$scene-gather-clamp" --scene "$scene" --method gather --rays 32 --backend cpu --max-distance 2 --seed 7
     render "$scene-adaptive" --scene "$scene" --method adaptive --min-rays 16 --max-rays 256 \
         --aov rays,relerr
+    render "$scene-adaptive-sobol" --scene "$scene" --method adaptive --min-rays 16 --max-rays 256 \
+        --sampler sobol --loosen 0.5 --aov rays
     render "$scene-photon1" --scene "$scene" --method photon1 --photons 20000 --gather 32
     render "$scene-photon2" --scene "$scene" --method photon2 --photons 20000 --gather 32 --source camera
 done

@@ -12,7 +12,7 @@
 //! With the grid sampler (the default) each round is its own jittered stratified grid, as
 //! `gather`'s rounds: a pixel that stops at N rays has the H of `gather --rays N --rounds
 //! N/(min_rays/8)`. With `--sampler sobol` the rounds are consecutive blocks of one
-//! Owen-scrambled Sobol sequence (`Rounds::Blocks` in `gather.rs`, issue #25): a pixel that
+//! Owen-scrambled Sobol sequence (`Rounds::Blocks` in `gather/directions.rs`): a pixel that
 //! stops at N rays has the H of `gather --sampler sobol --rays N`, so going on costs no
 //! stratification; the blocks' spread overstates the error (a conservative stop).
 
