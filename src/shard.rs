@@ -29,8 +29,21 @@ pub struct Part {
     pub report: RenderReport,
 }
 
-/// The one-machine image and report from every shard's part, in any order.
+/// The one-machine image and report from every shard's part, in any order: the parts put in
+/// shard order and checked to be one render's, each EXR checked against its JSON, the rows
+/// joined, and the reports summed into the image's.
 pub fn merge(parts: Vec<Part>) -> Result<Rendered> {
+    let parts = in_shard_order(parts)?;
+    let count = parts.len() as u32;
+    check_rows(&parts)?;
+    let (image, aovs) = join_rows(&parts)?;
+    let report = merged_report(&parts, count, image.width, image.height)?;
+    Ok(Rendered { image, aovs, report })
+}
+
+/// `parts` in shard order, one of each shard of one render; refused (naming what is wrong)
+/// where a part is no shard, of another render, repeated or missing.
+fn in_shard_order(parts: Vec<Part>) -> Result<Vec<Part>> {
     let shard_of = |p: &Part| {
         p.report
             .shard
@@ -64,11 +77,17 @@ pub fn merge(parts: Vec<Part>) -> Result<Rendered> {
             missing.join(", ")
         )));
     }
-    let parts: Vec<Part> = slots.into_iter().flatten().collect();
+    Ok(slots.into_iter().flatten().collect())
+}
+
+/// Refuses a part whose EXR is not the image its JSON describes: another size, or rows that
+/// hash differently from the hash the shard recorded.
+fn check_rows(parts: &[Part]) -> Result<()> {
+    let count = parts.len() as u32;
     for (index, part) in parts.iter().enumerate() {
-        let shard = Shard::new(index as u32, reference.count)?;
+        let shard = Shard::new(index as u32, count)?;
         let r = &part.report;
-        let what = format!("shard {index}/{}'s EXR", reference.count);
+        let what = format!("shard {index}/{}'s EXR", count);
         if (part.image.width, part.image.height) != (r.width, r.height) {
             return Err(Error::parameter(format!(
                 "{what} is {}x{}, its report says {}x{}: the EXR is not the image its JSON describes",
@@ -85,11 +104,17 @@ pub fn merge(parts: Vec<Part>) -> Result<Rendered> {
             )));
         }
     }
+    Ok(())
+}
+
+/// H and the AOVs with each shard's rows from its part.
+fn join_rows(parts: &[Part]) -> Result<(HmdImage, Vec<AovImage>)> {
+    let count = parts.len() as u32;
     let (width, height) = (parts[0].image.width, parts[0].image.height);
     let mut image = parts[0].image.clone();
     let mut aovs = parts[0].aovs.clone();
     for (index, part) in parts.iter().enumerate() {
-        let shard = Shard::new(index as u32, reference.count)?;
+        let shard = Shard::new(index as u32, count)?;
         for row in (0..height).filter(|&r| shard.has_row(r)) {
             let range = (row * width) as usize..((row + 1) * width) as usize;
             image.data[range.clone()].copy_from_slice(&part.image.data[range.clone()]);
@@ -98,6 +123,13 @@ pub fn merge(parts: Vec<Part>) -> Result<Rendered> {
             }
         }
     }
+    Ok((image, aovs))
+}
+
+/// The image's report from the parts' (shard order, `count` of them, `width` × `height`):
+/// sums of rays, escapes, seconds, photon holes and cube-map counts, means over the image's
+/// surface pixels, `null` where the parts disagree, and each shard's timings.
+fn merged_report(parts: &[Part], count: u32, width: u32, height: u32) -> Result<RenderReport> {
     let mut report = parts[0].report.clone();
     let sum = |f: fn(&RenderReport) -> Option<u64>| parts.iter().map(|p| f(&p.report)).sum::<Option<u64>>();
     report.rays_cast = sum(|r| r.rays_cast);
@@ -157,7 +189,7 @@ pub fn merge(parts: Vec<Part>) -> Result<Rendered> {
         .iter()
         .enumerate()
         .map(|(index, p)| {
-            let shard = Shard::new(index as u32, reference.count)?;
+            let shard = Shard::new(index as u32, count)?;
             let rows = (0..height).filter(|&r| shard.has_row(r)).count() as u64;
             Ok((rows * width as u64).saturating_sub(p.report.background_pixels as u64) as f64)
         })
@@ -198,7 +230,7 @@ pub fn merge(parts: Vec<Part>) -> Result<Rendered> {
             })
             .collect(),
     );
-    Ok(Rendered { image, aovs, report })
+    Ok(report)
 }
 
 /// Why shards `a` and `b` are not parts of one render, or `None` where they are: a different
