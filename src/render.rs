@@ -93,7 +93,6 @@ fn render_in_pool(
     options: &RenderOptions,
     pass: impl FnOnce(&EstimateContext, &GBuffer) -> Result<Vec<(Estimate, f64)>>,
 ) -> Result<Vec<Rendered>> {
-    let kernel = options.kernel;
     let pixels = options.width as u64 * options.height as u64;
     let expected = estimators
         .iter()
@@ -101,13 +100,47 @@ fn render_in_pool(
         .max()
         .unwrap_or(0);
     let start = Instant::now();
-    let (accel, bvh) = Accel::for_work(&scene.mesh, options.bvh_quality, pixels + expected, kernel)?;
+    let (accel, bvh) = Accel::for_work(&scene.mesh, options.bvh_quality, pixels + expected, options.kernel)?;
     let accel_build = start.elapsed().as_secs_f64();
     crate::interrupt::check()?;
 
     let primary_start = Instant::now();
+    let (gbuffer, background) = primary_pass(&accel, scene, options);
+    let primary = primary_start.elapsed().as_secs_f64();
+    crate::interrupt::check()?;
+
+    let context = EstimateContext {
+        accel: &accel,
+        scene,
+        seed: options.seed,
+        clamp: DistanceClamp::for_diagonal(scene.diagonal(), options.max_distance),
+        aovs: &options.aovs,
+        whole_image: options.shard.is_none(),
+        bvh,
+    };
+    let setup = Setup {
+        bvh,
+        background,
+        accel_build,
+        primary,
+        seconds: start.elapsed().as_secs_f64(),
+        d_min: context.clamp.min,
+        // The scene's content hash, for the shard reports: hashed once, not per output.
+        scene_content: options.shard.map(|_| scene.fingerprint()),
+    };
+    let estimates = pass(&context, &gbuffer)?;
+    Ok(estimators
+        .iter()
+        .zip(estimates)
+        .map(|(estimator, (estimate, seconds))| output(scene, options, &setup, *estimator, estimate, seconds))
+        .collect())
+}
+
+/// The primary hits of the rows `options` renders (a shard's, or all), and how many of those
+/// rows' pixels are background.
+fn primary_pass(accel: &Accel, scene: &Scene, options: &RenderOptions) -> (GBuffer, usize) {
     let shard = options.shard;
-    let gbuffer = primary_hits_where(&accel, scene, options.width, options.height, |row| {
+    let gbuffer = primary_hits_where(accel, scene, options.width, options.height, |row| {
         shard.is_none_or(|s| s.has_row(row))
     });
     let background = gbuffer
@@ -117,100 +150,95 @@ fn render_in_pool(
         .filter(|(row, _)| shard.is_none_or(|s| s.has_row(*row as u32)))
         .map(|(_, points)| points.iter().filter(|p| p.is_none()).count())
         .sum();
-    let primary = primary_start.elapsed().as_secs_f64();
-    crate::interrupt::check()?;
+    (gbuffer, background)
+}
 
+/// What every output of one pass shares: the BVH preset built, the background pixels, the
+/// set-up's seconds (BVH, primary rays, both), the distance clamp's floor, and the scene's
+/// content hash where the render is a shard.
+struct Setup {
+    bvh: BuildQuality,
+    background: usize,
+    accel_build: f64,
+    primary: f64,
+    seconds: f64,
+    d_min: f32,
+    scene_content: Option<u64>,
+}
+
+/// One output of the pass: `estimator`'s image, AOVs and report, from its `estimate` that
+/// took `estimate_seconds` after the shared `setup`.
+fn output(
+    scene: &Scene,
+    options: &RenderOptions,
+    setup: &Setup,
+    estimator: &dyn Estimator,
+    estimate: Estimate,
+    estimate_seconds: f64,
+) -> Rendered {
     let bounds = scene.bounds();
-    let l_diag = bounds.diagonal();
-    let context = EstimateContext {
-        accel: &accel,
-        scene,
+    let mut report = RenderReport {
+        hmdist_version: env!("CARGO_PKG_VERSION").into(),
+        method: estimator.method().into(),
+        scene: scene.name.clone(),
+        width: options.width,
+        height: options.height,
         seed: options.seed,
-        clamp: DistanceClamp::for_diagonal(l_diag, options.max_distance),
-        aovs: &options.aovs,
-        whole_image: shard.is_none(),
-        bvh,
+        threads: rayon::current_num_threads(),
+        kernel: options.kernel.name().into(),
+        bvh: setup.bvh.name().into(),
+        max_distance: options.max_distance,
+        triangles: scene.mesh.triangle_count(),
+        l_diag: bounds.diagonal(),
+        d_min: setup.d_min,
+        bounds: BoundsReport::from(&bounds),
+        camera: CameraReport::from(&scene.camera),
+        light: scene.light.as_ref().map(LightReport::from),
+        display_scale: scene.display_scale,
+        background_pixels: setup.background,
+        rays_cast: estimate.rays.map(|r| r.cast),
+        escaped_rays: estimate.rays.map(|r| r.escaped),
+        mrays_per_s: estimate.rays.map(|r| r.cast as f64 / r.seconds.max(1e-9) / 1e6),
+        seconds: Seconds {
+            load: 0.0,
+            accel_build: setup.accel_build,
+            primary: setup.primary,
+            estimate: estimate_seconds,
+            // The shared set-up (BVH, primary rays) and this output's own estimate.
+            total: setup.seconds + estimate_seconds,
+            phases: estimate.phases,
+        },
+        channels: std::iter::once("Y")
+            .chain(options.aovs.iter().map(|a| a.name()))
+            .map(String::from)
+            .collect(),
+        shard: options.shard.zip(setup.scene_content).map(|(s, content)| ShardReport {
+            index: s.index,
+            count: s.count,
+            fingerprint: fingerprint(scene, content, estimator, options),
+            key: Some(render_key(scene, content, estimator, options, setup.bvh, &estimate.details)),
+            rows_hash: None,
+        }),
+        shards: None,
+        parameters: estimator.parameters(),
+        details: estimate.details,
     };
-    let setup = start.elapsed().as_secs_f64();
-    let estimates = pass(&context, &gbuffer)?;
-    // The scene's content hash, for the shard reports: hashed once, not per output.
-    let scene_content = shard.map(|_| scene.fingerprint());
-    let outputs = estimators
-        .iter()
-        .zip(estimates)
-        .map(|(estimator, (estimate, estimate_seconds))| {
-            let report = RenderReport {
-                hmdist_version: env!("CARGO_PKG_VERSION").into(),
-                method: estimator.method().into(),
-                scene: scene.name.clone(),
-                width: options.width,
-                height: options.height,
-                seed: options.seed,
-                threads: rayon::current_num_threads(),
-                kernel: kernel.name().into(),
-                bvh: bvh.name().into(),
-                max_distance: options.max_distance,
-                triangles: scene.mesh.triangle_count(),
-                l_diag,
-                d_min: context.clamp.min,
-                bounds: BoundsReport::from(&bounds),
-                camera: CameraReport::from(&scene.camera),
-                light: scene.light.as_ref().map(LightReport::from),
-                display_scale: scene.display_scale,
-                background_pixels: background,
-                rays_cast: estimate.rays.map(|r| r.cast),
-                escaped_rays: estimate.rays.map(|r| r.escaped),
-                mrays_per_s: estimate.rays.map(|r| r.cast as f64 / r.seconds.max(1e-9) / 1e6),
-                seconds: Seconds {
-                    load: 0.0,
-                    accel_build,
-                    primary,
-                    estimate: estimate_seconds,
-                    // The shared set-up (BVH, primary rays) and this output's own estimate.
-                    total: setup + estimate_seconds,
-                    phases: estimate.phases,
-                },
-                channels: std::iter::once("Y")
-                    .chain(options.aovs.iter().map(|a| a.name()))
-                    .map(String::from)
-                    .collect(),
-                shard: shard.zip(scene_content).map(|(s, content)| ShardReport {
-                    index: s.index,
-                    count: s.count,
-                    fingerprint: fingerprint(scene, content, *estimator, options),
-                    key: Some(render_key(
-                        scene,
-                        content,
-                        *estimator,
-                        options,
-                        bvh,
-                        &estimate.details,
-                    )),
-                    rows_hash: None,
-                }),
-                shards: None,
-                parameters: estimator.parameters(),
-                details: estimate.details,
-            };
-            let image = HmdImage::new(options.width, options.height, estimate.hmd);
-            let mut report = report;
-            if let Some(part) = report.shard.as_mut() {
-                let shard = crate::options::Shard {
-                    index: part.index,
-                    count: part.count,
-                };
-                let channels: Vec<&[f32]> = std::iter::once(&image.data[..])
-                    .chain(estimate.aovs.iter().map(|a| &a.data[..]))
-                    .collect();
-                part.rows_hash = Some(shard.rows_hash(image.width, &channels));
-            }
-            Rendered {
-                image,
-                aovs: estimate.aovs,
-                report,
-            }
-        });
-    Ok(outputs.collect())
+    let image = HmdImage::new(options.width, options.height, estimate.hmd);
+    if let Some(part) = report.shard.as_mut() {
+        let shard = crate::options::Shard {
+            index: part.index,
+            count: part.count,
+        };
+        let channels: Vec<&[f32]> = std::iter::once(&image.data[..])
+            .chain(estimate.aovs.iter().map(|a| &a.data[..]))
+            .collect();
+        part.rows_hash = Some(shard.rows_hash(image.width, &channels));
+    }
+    Rendered {
+        image,
+        aovs: estimate.aovs,
+        report,
+    }
 }
 
 /// The fingerprint shard reports have carried since shards began: a hash of the scene (name
