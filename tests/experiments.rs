@@ -693,7 +693,7 @@ fn the_cost_plot_has_every_image_of_tables_1_to_3_and_its_front_is_the_undominat
     let p = Preset::Quick.params();
     assert_eq!(
         cost.rows.len(),
-        2 * p.rays.len() + 2 * p.photons.len() * p.gathers.len(),
+        2 * p.rays.len() + 2 * p.photons.len() * p.nearest.len(),
         "gather and cube map by N, methods I and II by photons and K:\n{}",
         cost.csv()
     );

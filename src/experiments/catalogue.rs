@@ -51,7 +51,7 @@ pub const EXPERIMENTS: &[Experiment] = &[
     Experiment {
         name: "table3",
         summary: "photon gather seconds and f_diff by photons and K, methods I and II (with fig14, fig15)",
-        images: |p| 1 + 2 * (p.photons.len() * p.gathers.len()) as u64,
+        images: |p| 1 + 2 * (p.photons.len() * p.nearest.len()) as u64,
         run: photons::table3,
     },
     Experiment {
@@ -69,7 +69,7 @@ pub const EXPERIMENTS: &[Experiment] = &[
     Experiment {
         name: "fig16_17",
         summary: "method II by source, bounces, K and photons",
-        images: |p| 1 + 4 * (p.fig16_photons.len() * p.gathers.len()) as u64,
+        images: |p| 1 + 4 * (p.fig16_photons.len() * p.nearest.len()) as u64,
         run: photons::fig16_17,
     },
     Experiment {

@@ -91,7 +91,7 @@ pub fn table3(runner: &Runner) -> Result<Section> {
     let mut seconds = [0.0, 0.0];
     let mut lower_rows = 0;
     for &photons in &p.photons {
-        for &k in &p.gathers {
+        for &k in &p.nearest {
             let mut cells = vec![];
             for (m, method) in PhotonMethod::ALL.iter().enumerate() {
                 let config = photon_config(photons, k, source, SHORT_PATHS);
@@ -125,7 +125,7 @@ pub fn table3(runner: &Runner) -> Result<Section> {
     let mut files = table.write(&runner.out, "table3")?;
     for (name, tiles) in [("fig14", &grids[0]), ("fig15", &grids[1])] {
         let path = runner.out.join(format!("{name}.png"));
-        write_grid(&path, tiles, p.gathers.len())?;
+        write_grid(&path, tiles, p.nearest.len())?;
         files.push(path);
     }
     let n = table.rows.len() as f64;
@@ -176,7 +176,7 @@ pub fn table3(runner: &Runner) -> Result<Section> {
 pub fn fig10(runner: &Runner) -> Result<Section> {
     let p = &runner.params;
     let reference = reference(runner)?;
-    let (photons, k) = (p.fig10_photons, p.fig10_gather);
+    let (photons, k) = (p.fig10_photons, p.fig10_nearest);
     let source = default_source(runner);
     let s = runner.scene.display_scale;
     let mut table = Table::new(
@@ -283,7 +283,7 @@ pub fn fig16_17(runner: &Runner) -> Result<Section> {
         let mut tiles = vec![];
         for bounces in paper::BOUNCES {
             for &photons in &p.fig16_photons {
-                for &k in &p.gathers {
+                for &k in &p.nearest {
                     let config = photon_config(photons, k, source, bounces);
                     let (image, _) = runner.method_image("photon2", &config, 1)?;
                     let d = f_diff(&reference, &image, l_diag)?;
@@ -307,7 +307,7 @@ pub fn fig16_17(runner: &Runner) -> Result<Section> {
             SourceKind::Camera => "fig17",
         };
         let path = runner.out.join(format!("{name}.png"));
-        write_grid(&path, &tiles, p.gathers.len())?;
+        write_grid(&path, &tiles, p.nearest.len())?;
         files.push(path);
     }
     files.extend(table.write(&runner.out, "fig16_17")?);

@@ -34,13 +34,13 @@ pub struct PresetParams {
     /// Photon counts of Tables 3 and 4.
     pub photons: Vec<usize>,
     /// Photons gathered per pixel (K) for Table 3 and Fig. 16/17.
-    pub gathers: Vec<usize>,
+    pub nearest: Vec<usize>,
     /// Photon counts of Fig. 16/17.
     pub fig16_photons: Vec<usize>,
     /// Photons of Fig. 10.
     pub fig10_photons: usize,
     /// Photons gathered per pixel (K) of Fig. 10.
-    pub fig10_gather: usize,
+    pub fig10_nearest: usize,
     /// Per-quadrant hemicube resolution R of Tables 1 and 2.
     pub cube_res: u32,
 }
@@ -63,10 +63,10 @@ impl Preset {
                 reference_rays: 16_384,
                 rays: doubling(32, 2048).collect(),
                 photons: vec![130_000, 260_000, 530_000, 1_060_000],
-                gathers: vec![64, 256, 1024],
+                nearest: vec![64, 256, 1024],
                 fig16_photons: vec![260_000, 1_060_000],
                 fig10_photons: 1_060_000,
-                fig10_gather: 4096,
+                fig10_nearest: 4096,
                 cube_res: 64,
             },
             Preset::Paper => PresetParams {
@@ -76,10 +76,10 @@ impl Preset {
                 photons: vec![
                     130_000, 260_000, 530_000, 1_060_000, 2_130_000, 4_260_000, 8_530_000,
                 ],
-                gathers: vec![64, 128, 256, 512, 1024],
+                nearest: vec![64, 128, 256, 512, 1024],
                 fig16_photons: vec![1_060_000, 8_530_000],
                 fig10_photons: 8_530_000,
-                fig10_gather: 65_536,
+                fig10_nearest: 65_536,
                 cube_res: 64,
             },
         }

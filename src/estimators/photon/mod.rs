@@ -382,7 +382,7 @@ impl Estimator for PhotonEstimator {
             estimator: self,
             context,
             map,
-            k: NonZero::new(self.params.nearest).expect("validated: nearest ≥ 1"),
+            nearest: NonZero::new(self.params.nearest).expect("validated: nearest ≥ 1"),
             photons_stored: header.photons_stored as usize,
             paths_traced: header.paths_traced,
             escaped_photons: header.escaped_photons,
@@ -418,7 +418,7 @@ struct PhotonPixels<'a> {
     estimator: &'a PhotonEstimator,
     context: &'a EstimateContext<'a>,
     map: Maps<'a>,
-    k: NonZero<usize>,
+    nearest: NonZero<usize>,
     photons_stored: usize,
     paths_traced: u64,
     escaped_photons: u64,
@@ -474,7 +474,7 @@ impl PixelWorker for PhotonWorker<'_> {
         let mut mean = HarmonicMean::default();
         let (x, n) = (hit.point, hit.normal);
         w.map
-            .gather(&mut self.scratch, x, n, w.k, max_radius, NORMAL_FILTER_COS, |d| {
+            .gather(&mut self.scratch, x, n, w.nearest, max_radius, NORMAL_FILTER_COS, |d| {
                 mean.add(d, clamp)
             });
         mean.value()
