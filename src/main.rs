@@ -52,7 +52,9 @@ fn quiet_headless_vulkan() -> Option<std::path::PathBuf> {
         let temp = std::env::temp_dir();
         for entry in std::fs::read_dir(&temp).into_iter().flatten().flatten() {
             let name = entry.file_name();
-            let pid = name.to_str().and_then(|n| n.strip_prefix(PREFIX)?.parse::<u32>().ok());
+            let pid = name
+                .to_str()
+                .and_then(|n| n.strip_prefix(PREFIX)?.parse::<u32>().ok());
             if pid.is_some_and(|pid| !std::path::Path::new(&format!("/proc/{pid}")).exists()) {
                 let _ = std::fs::remove_dir(entry.path()); // only if empty: nothing of anyone's lost
             }

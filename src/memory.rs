@@ -76,7 +76,11 @@ fn address_space_available(root: &Path) -> Option<u128> {
     let limits = std::fs::read_to_string(root.join("proc/self/limits")).ok()?;
     let line = limits.lines().find(|l| l.starts_with("Max address space"))?;
     // "Max address space   <soft>   <hard>   bytes"; the soft one is what binds.
-    let limit: u128 = line["Max address space".len()..].split_whitespace().next()?.parse().ok()?;
+    let limit: u128 = line["Max address space".len()..]
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()?;
     let status = std::fs::read_to_string(root.join("proc/self/status")).ok()?;
     let line = status.lines().find(|l| l.starts_with("VmSize:"))?;
     let kb: u128 = line.split_whitespace().nth(1)?.parse().ok()?;
@@ -176,9 +180,7 @@ pub fn check(
             bytes,
             bound: Bound::Machine,
         },
-        None if std::env::var_os(NO_CHECK).is_some_and(|v| !v.is_empty() && v != "0") => {
-            return Ok(())
-        }
+        None if std::env::var_os(NO_CHECK).is_some_and(|v| !v.is_empty() && v != "0") => return Ok(()),
         None => match available_under(Path::new("/")) {
             Some(a) => a,
             None => return Ok(()),
@@ -359,7 +361,10 @@ mod tests {
             &[
                 MEMINFO,
                 ("proc/self/limits", limits),
-                ("proc/self/status", "Name:\thmdist\nVmPeak:\t  300000 kB\nVmSize:\t  204800 kB\n"),
+                (
+                    "proc/self/status",
+                    "Name:\thmdist\nVmPeak:\t  300000 kB\nVmSize:\t  204800 kB\n",
+                ),
             ],
         );
         let a = available_under(&root).unwrap();
@@ -373,7 +378,11 @@ mod tests {
         let e = check_against(Some("size"), "8192x8192", 2 * GIB, a).unwrap_err();
         assert!(e.to_string().contains("address-space limit (ulimit -v)"), "{e}");
         // "unlimited": the machine's figure.
-        std::fs::write(root.join("proc/self/limits"), limits.replace("1024000000", "unlimited")).unwrap();
+        std::fs::write(
+            root.join("proc/self/limits"),
+            limits.replace("1024000000", "unlimited"),
+        )
+        .unwrap();
         assert_eq!(available_under(&root).unwrap().bound, Bound::Machine);
         std::fs::remove_dir_all(root).unwrap();
     }

@@ -21,7 +21,10 @@ pub struct FDiff {
 /// (positive and finite, else an error naming it).
 pub fn f_diff(reference: &HmdImage, test: &HmdImage, l_diag: f32) -> Result<FDiff> {
     if !(l_diag.is_finite() && l_diag > 0.0) {
-        return Err(Error::invalid("l_diag", format!("must be a positive finite length, not {l_diag}")));
+        return Err(Error::invalid(
+            "l_diag",
+            format!("must be a positive finite length, not {l_diag}"),
+        ));
     }
     if (reference.width, reference.height) != (test.width, test.height) {
         return Err(Error::parameter(format!(

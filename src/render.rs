@@ -100,7 +100,12 @@ fn render_in_pool(
         .max()
         .unwrap_or(0);
     let start = Instant::now();
-    let (accel, bvh) = Accel::for_work(&scene.mesh, options.bvh_quality, pixels + expected, options.kernel)?;
+    let (accel, bvh) = Accel::for_work(
+        &scene.mesh,
+        options.bvh_quality,
+        pixels + expected,
+        options.kernel,
+    )?;
     let accel_build = start.elapsed().as_secs_f64();
     crate::interrupt::check()?;
 
@@ -212,13 +217,23 @@ fn output(
             .chain(options.aovs.iter().map(|a| a.name()))
             .map(String::from)
             .collect(),
-        shard: options.shard.zip(setup.scene_content).map(|(s, content)| ShardReport {
-            index: s.index,
-            count: s.count,
-            fingerprint: fingerprint(scene, content, estimator, options),
-            key: Some(render_key(scene, content, estimator, options, setup.bvh, &estimate.details)),
-            rows_hash: None,
-        }),
+        shard: options
+            .shard
+            .zip(setup.scene_content)
+            .map(|(s, content)| ShardReport {
+                index: s.index,
+                count: s.count,
+                fingerprint: fingerprint(scene, content, estimator, options),
+                key: Some(render_key(
+                    scene,
+                    content,
+                    estimator,
+                    options,
+                    setup.bvh,
+                    &estimate.details,
+                )),
+                rows_hash: None,
+            }),
         shards: None,
         parameters: estimator.parameters(),
         details: estimate.details,

@@ -124,7 +124,8 @@ impl RenderReport {
     pub fn read(path: &std::path::Path) -> crate::error::Result<RenderReport> {
         use crate::error::Error;
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, "read", e))?;
-        serde_json::from_str(&text).map_err(|e| Error::file(path, format!("not an hmdist render report: {e}")))
+        serde_json::from_str(&text)
+            .map_err(|e| Error::file(path, format!("not an hmdist render report: {e}")))
     }
 }
 

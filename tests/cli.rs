@@ -257,7 +257,9 @@ fn the_runtime_folder_a_killed_run_left_is_removed_by_the_next_run() {
     }
     std::fs::write(not_empty.join("kept"), b"not ours").unwrap();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_hmdist"))
-        .args(["render", "--quiet", "--size", "8x8", "--rays", "4", "--out", "o.exr"])
+        .args([
+            "render", "--quiet", "--size", "8x8", "--rays", "4", "--out", "o.exr",
+        ])
         .current_dir(dir.path())
         .env_remove("XDG_RUNTIME_DIR")
         .env("TMPDIR", &temp)
@@ -265,8 +267,14 @@ fn the_runtime_folder_a_killed_run_left_is_removed_by_the_next_run() {
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(!stale.exists(), "the dead run's folder is removed");
-    assert!(live.exists() && not_empty.exists(), "a live run's folder and other folders are kept");
-    let mut left: Vec<_> = std::fs::read_dir(&temp).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert!(
+        live.exists() && not_empty.exists(),
+        "a live run's folder and other folders are kept"
+    );
+    let mut left: Vec<_> = std::fs::read_dir(&temp)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
     left.sort();
     assert_eq!(left.len(), 2, "this run removed its own folder: {left:?}");
 }
@@ -283,7 +291,18 @@ fn render_under_address_space_limit(
     let dir = Scratch::new(name);
     let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_hmdist"));
     command
-        .args(["render", "--quiet", "--backend", "cpu", "--size", size, "--rays", "1", "--out", "o.exr"])
+        .args([
+            "render",
+            "--quiet",
+            "--backend",
+            "cpu",
+            "--size",
+            size,
+            "--rays",
+            "1",
+            "--out",
+            "o.exr",
+        ])
         .envs(env.iter().copied())
         .current_dir(dir.path());
     // SAFETY: setrlimit only, between fork and exec.

@@ -95,7 +95,11 @@ fn check(page: &Path, page_text: &str, target: &str, broken: &mut Vec<String>) {
         Some((file, anchor)) => (file, Some(anchor)),
         None => (target, None),
     };
-    let path = if file.is_empty() { page.to_path_buf() } else { page.parent().unwrap().join(file) };
+    let path = if file.is_empty() {
+        page.to_path_buf()
+    } else {
+        page.parent().unwrap().join(file)
+    };
     if !path.exists() {
         broken.push(format!("{}: {target} does not exist", page.display()));
         return;
@@ -106,17 +110,33 @@ fn check(page: &Path, page_text: &str, target: &str, broken: &mut Vec<String>) {
     if !markdown && !html {
         return;
     }
-    let text = if file.is_empty() { page_text.to_string() } else { std::fs::read_to_string(&path).unwrap() };
+    let text = if file.is_empty() {
+        page_text.to_string()
+    } else {
+        std::fs::read_to_string(&path).unwrap()
+    };
     if !has_section(&text, markdown, anchor) {
-        broken.push(format!("{}: {target}: #{anchor} names no section", page.display()));
+        broken.push(format!(
+            "{}: {target}: #{anchor} names no section",
+            page.display()
+        ));
     }
 }
 
 #[test]
 fn a_headings_anchor_is_githubs() {
-    assert_eq!(heading_anchor(" Final gathering (`--method gather`)"), "final-gathering---method-gather");
-    assert_eq!(heading_anchor(" Reliability: what hmdist promises"), "reliability-what-hmdist-promises");
-    assert_eq!(heading_anchor(" Accuracy against cost: f_diff"), "accuracy-against-cost-f_diff");
+    assert_eq!(
+        heading_anchor(" Final gathering (`--method gather`)"),
+        "final-gathering---method-gather"
+    );
+    assert_eq!(
+        heading_anchor(" Reliability: what hmdist promises"),
+        "reliability-what-hmdist-promises"
+    );
+    assert_eq!(
+        heading_anchor(" Accuracy against cost: f_diff"),
+        "accuracy-against-cost-f_diff"
+    );
 }
 
 #[test]

@@ -32,14 +32,23 @@ fn help_flags(words: &[&str]) -> BTreeSet<String> {
         .lines()
         .filter_map(|line| {
             let option = line.trim_start();
-            let option = option.strip_prefix("-").filter(|o| o.len() > 2 && o.as_bytes()[1] == b',').map_or(option, |o| o[2..].trim_start());
+            let option = option
+                .strip_prefix("-")
+                .filter(|o| o.len() > 2 && o.as_bytes()[1] == b',')
+                .map_or(option, |o| o[2..].trim_start());
             let name = option.strip_prefix("--")?;
-            let end = name.find(|c: char| !(c.is_ascii_alphanumeric() || c == '-')).unwrap_or(name.len());
+            let end = name
+                .find(|c: char| !(c.is_ascii_alphanumeric() || c == '-'))
+                .unwrap_or(name.len());
             Some(format!("--{}", &name[..end]))
         })
         .filter(|f| f != "--help" && f != "--version")
         .collect();
-    assert!(!flags.is_empty(), "no flags found in hmdist {} --help:\n{text}", words.join(" "));
+    assert!(
+        !flags.is_empty(),
+        "no flags found in hmdist {} --help:\n{text}",
+        words.join(" ")
+    );
     flags
 }
 
@@ -50,7 +59,9 @@ fn flags_in(text: &str) -> Vec<String> {
     while let Some(at) = rest.find("--") {
         let before = rest[..at].chars().next_back();
         let name = &rest[at + 2..];
-        let end = name.find(|c: char| !(c.is_ascii_alphanumeric() || c == '-')).unwrap_or(name.len());
+        let end = name
+            .find(|c: char| !(c.is_ascii_alphanumeric() || c == '-'))
+            .unwrap_or(name.len());
         if !before.is_some_and(|c| c.is_ascii_alphanumeric() || c == '-') && end > 0 {
             flags.push(format!("--{}", &name[..end]));
         }
@@ -97,7 +108,9 @@ fn commands(markdown: &str) -> Vec<(usize, String)> {
 /// The command of `line` (`hmdist WORDS ...`): its index in [`COMMANDS`], if it names one.
 fn command_of(line: &str) -> Option<usize> {
     let words: Vec<&str> = line.split_whitespace().skip(1).collect();
-    COMMANDS.iter().position(|c| words.len() >= c.len() && words[..c.len()] == **c)
+    COMMANDS
+        .iter()
+        .position(|c| words.len() >= c.len() && words[..c.len()] == **c)
 }
 
 #[test]
@@ -109,7 +122,10 @@ fn the_guide_names_every_flag_of_every_command_and_no_flag_that_does_not_exist()
     let mut wrong = vec![];
     for (command, flags) in COMMANDS.iter().zip(&known) {
         for flag in flags.difference(&in_guide) {
-            wrong.push(format!("docs/guide.md never names `hmdist {} {flag}`", command.join(" ")));
+            wrong.push(format!(
+                "docs/guide.md never names `hmdist {} {flag}`",
+                command.join(" ")
+            ));
         }
     }
     let mut checked = 0;
@@ -126,11 +142,22 @@ fn the_guide_names_every_flag_of_every_command_and_no_flag_that_does_not_exist()
             for flag in flags_in(&command) {
                 checked += 1;
                 if !known[c].contains(&flag) && flag != "--help" {
-                    wrong.push(format!("{page}:{line}: `hmdist {} {flag}`: no such flag", COMMANDS[c].join(" ")));
+                    wrong.push(format!(
+                        "{page}:{line}: `hmdist {} {flag}`: no such flag",
+                        COMMANDS[c].join(" ")
+                    ));
                 }
             }
         }
     }
-    assert!(checked > 50, "only {checked} flags of commands found: the scan is broken");
-    assert!(wrong.is_empty(), "{} mismatches:\n{}", wrong.len(), wrong.join("\n"));
+    assert!(
+        checked > 50,
+        "only {checked} flags of commands found: the scan is broken"
+    );
+    assert!(
+        wrong.is_empty(),
+        "{} mismatches:\n{}",
+        wrong.len(),
+        wrong.join("\n")
+    );
 }

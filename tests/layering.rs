@@ -265,7 +265,10 @@ fn children_used(module: &Module, files: &BTreeMap<Module, PathBuf>) -> BTreeSet
         .lines()
         .filter(|l| {
             let l = l.trim_start();
-            !(l.starts_with("mod ") || l.starts_with("pub mod ") || l.starts_with("pub use ") || l.starts_with("pub(crate) mod "))
+            !(l.starts_with("mod ")
+                || l.starts_with("pub mod ")
+                || l.starts_with("pub use ")
+                || l.starts_with("pub(crate) mod "))
         })
         .collect::<Vec<_>>()
         .join("\n");
@@ -296,7 +299,9 @@ fn children_used(module: &Module, files: &BTreeMap<Module, PathBuf>) -> BTreeSet
 fn imports_parent(child: &Module, parent: &Module, files: &BTreeMap<Module, PathBuf>) -> bool {
     let text = std::fs::read_to_string(&files[child]).unwrap();
     let code = text.split("#[cfg(test)]\nmod ").next().unwrap_or(&text);
-    paths(code).iter().any(|p| resolve(child, p, files).as_ref() == Some(parent))
+    paths(code)
+        .iter()
+        .any(|p| resolve(child, p, files).as_ref() == Some(parent))
 }
 
 /// Pairs of a parent module and a child that import each other ([`children_used`] one way,
@@ -318,7 +323,11 @@ fn parent_child_pairs(files: &BTreeMap<Module, PathBuf>) -> Vec<String> {
 fn no_parent_and_child_import_each_other() {
     let files = modules(&src());
     let pairs = parent_child_pairs(&files);
-    assert!(pairs.is_empty(), "a parent and a child that import each other:\n{}", pairs.join("\n"));
+    assert!(
+        pairs.is_empty(),
+        "a parent and a child that import each other:\n{}",
+        pairs.join("\n")
+    );
 }
 
 /// The checks see what they must: a made-up pair of files that import each other is a
@@ -351,12 +360,19 @@ fn the_checks_find_a_cycle_when_there_is_one() {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(dir.join("p")).unwrap();
     std::fs::write(dir.join("lib.rs"), "mod p;\n").unwrap();
-    std::fs::write(dir.join("p/mod.rs"), "mod k;\nmod q;\npub use k::X;\nfn f() { q::g() }\n").unwrap();
+    std::fs::write(
+        dir.join("p/mod.rs"),
+        "mod k;\nmod q;\npub use k::X;\nfn f() { q::g() }\n",
+    )
+    .unwrap();
     std::fs::write(dir.join("p/q.rs"), "use super::Thing;\npub fn g() {}\n").unwrap();
     std::fs::write(dir.join("p/k.rs"), "use super::Thing;\npub struct X;\n").unwrap();
     let files = modules(&dir);
     let pairs = parent_child_pairs(&files);
     std::fs::remove_dir_all(&dir).unwrap();
     assert_eq!(pairs.len(), 1, "{pairs:?}");
-    assert!(pairs[0].ends_with("p/q.rs"), "{pairs:?}: only the child the parent calls, not the re-exported one");
+    assert!(
+        pairs[0].ends_with("p/q.rs"),
+        "{pairs:?}: only the child the parent calls, not the re-exported one"
+    );
 }

@@ -201,7 +201,10 @@ impl PyCamera {
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         let c = slf.borrow();
         let args = (c.eye(), c.target(), c.up(), c.fov_y_deg(), c.size);
-        Ok((slf.get_type().into_any(), args.into_pyobject(slf.py())?.into_any()))
+        Ok((
+            slf.get_type().into_any(),
+            args.into_pyobject(slf.py())?.into_any(),
+        ))
     }
 
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
@@ -380,7 +383,8 @@ impl PyScene {
         let scene = scene.as_ref();
         let reporter: &dyn Progress = if progress { &Stderr } else { &Silent };
         let estimator = estimator.as_ref();
-        let rendered = interruptible(py, || render(scene, estimator, &options, reporter))?.map_err(py_error)?;
+        let rendered =
+            interruptible(py, || render(scene, estimator, &options, reporter))?.map_err(py_error)?;
         let (w, h) = (rendered.image.width as usize, rendered.image.height as usize);
         let image = PyArray1::from_vec(py, rendered.image.data).reshape([h, w])?;
         let report = json_to_py(py, &rendered.report.to_json())?;
@@ -537,13 +541,34 @@ impl PyScene {
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         let py = slf.py();
         let s = &slf.get().scene;
-        let positions: Vec<u8> = s.mesh.positions.iter().flat_map(|p| p.to_array()).flat_map(f32::to_le_bytes).collect();
-        let indices: Vec<u8> = s.mesh.indices.iter().flatten().flat_map(|i| i.to_le_bytes()).collect();
+        let positions: Vec<u8> = s
+            .mesh
+            .positions
+            .iter()
+            .flat_map(|p| p.to_array())
+            .flat_map(f32::to_le_bytes)
+            .collect();
+        let indices: Vec<u8> = s
+            .mesh
+            .indices
+            .iter()
+            .flatten()
+            .flat_map(|i| i.to_le_bytes())
+            .collect();
         let c = &s.camera;
-        let camera = (c.eye.to_array(), c.target.to_array(), c.up.to_array(), c.fov_y_deg);
-        let light = s
-            .light
-            .map(|l| (l.position.to_array(), l.direction.to_array(), l.cone_half_angle_deg));
+        let camera = (
+            c.eye.to_array(),
+            c.target.to_array(),
+            c.up.to_array(),
+            c.fov_y_deg,
+        );
+        let light = s.light.map(|l| {
+            (
+                l.position.to_array(),
+                l.direction.to_array(),
+                l.cone_half_angle_deg,
+            )
+        });
         let args = (
             s.name.as_str(),
             pyo3::types::PyBytes::new(py, &positions),
@@ -568,8 +593,14 @@ impl PyScene {
         display_scale: f32,
     ) -> PyResult<Self> {
         let word = |b: &[u8]| -> [u8; 4] { [b[0], b[1], b[2], b[3]] };
-        let floats: Vec<f32> = positions.chunks_exact(4).map(|b| f32::from_le_bytes(word(b))).collect();
-        let ints: Vec<u32> = indices.chunks_exact(4).map(|b| u32::from_le_bytes(word(b))).collect();
+        let floats: Vec<f32> = positions
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes(word(b)))
+            .collect();
+        let ints: Vec<u32> = indices
+            .chunks_exact(4)
+            .map(|b| u32::from_le_bytes(word(b)))
+            .collect();
         let mesh = Mesh {
             positions: floats.chunks_exact(3).map(Vec3::from_slice).collect(),
             indices: ints.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
@@ -581,11 +612,13 @@ impl PyScene {
             up: up.into(),
             fov_y_deg,
         };
-        let light = light.map(|(position, direction, cone_half_angle_deg)| hmdist::scene::SpotLight {
-            position: position.into(),
-            direction: direction.into(),
-            cone_half_angle_deg,
-        });
+        let light = light.map(
+            |(position, direction, cone_half_angle_deg)| hmdist::scene::SpotLight {
+                position: position.into(),
+                direction: direction.into(),
+                cone_half_angle_deg,
+            },
+        );
         PyScene::new(hmdist::scene::Scene {
             name,
             mesh,
@@ -727,7 +760,10 @@ fn _hmdist(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_exr, m)?)?;
     m.add("DeviceError", m.py().get_type::<DeviceError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-    m.add("BUILTIN_SCENES", hmdist::scene::procedural::BUILTIN_NAMES.to_vec())?;
+    m.add(
+        "BUILTIN_SCENES",
+        hmdist::scene::procedural::BUILTIN_NAMES.to_vec(),
+    )?;
     // The library's defaults, which the Python signatures take rather than repeat.
     m.add("DEFAULT_RAYS", hmdist::estimators::gather::DEFAULT_RAYS)?;
     m.add("DEFAULT_SEED", hmdist::render::DEFAULT_SEED)?;

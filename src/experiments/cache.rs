@@ -264,9 +264,8 @@ impl Runner<'_> {
     /// Renames the cached files of `legacy` (the image, and any of its parts) to `stem`'s,
     /// where `stem` has none: the EXR first, then the JSON that marks it cached.
     pub(super) fn adopt_legacy(&self, legacy: &str, stem: &str) {
-        let names = std::iter::once((legacy.to_string(), stem.to_string())).chain(
-            (0..PARTS).map(|k| (Self::part_stem(legacy, k, PARTS), Self::part_stem(stem, k, PARTS))),
-        );
+        let names = std::iter::once((legacy.to_string(), stem.to_string()))
+            .chain((0..PARTS).map(|k| (Self::part_stem(legacy, k, PARTS), Self::part_stem(stem, k, PARTS))));
         for (old, new) in names {
             let ((old_exr, old_json), (new_exr, new_json)) = (self.cache_paths(&old), self.cache_paths(&new));
             if old_json.exists() && !new_json.exists() {
@@ -313,9 +312,9 @@ pub(super) fn read_cached(
 mod tests {
     use std::cell::Cell;
 
-    use crate::experiments::presets::Preset;
     use super::*;
     use crate::estimators::Backend;
+    use crate::experiments::presets::Preset;
 
     /// The parts of an image that an interrupted run cached count, in the run that finishes
     /// the image, with the seconds their reports give; the parts this run renders do not.

@@ -25,7 +25,6 @@ const SHORT_PATHS: u32 = paper::BOUNCES[0];
 /// The paper's long paths (Table 4).
 const LONG_PATHS: u32 = paper::BOUNCES[1];
 
-
 /// A photon method's configuration: `photons`, `k` gathered, `source`, `max_bounces`,
 /// others default.
 fn photon_config(photons: usize, k: usize, source: SourceKind, max_bounces: u32) -> PhotonParams {

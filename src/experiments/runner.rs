@@ -99,7 +99,11 @@ impl<'a> Runner<'a> {
     pub fn new(scene_arg: &str, preset: Preset, out: &Path, progress: &'a dyn Progress) -> Result<Self> {
         let scene = Scene::load(scene_arg)?;
         let scene_content = scene.fingerprint();
-        let scene_key = format!("{}|{}|{scene_content:016x}", env!("CARGO_PKG_VERSION"), scene.name);
+        let scene_key = format!(
+            "{}|{}|{scene_content:016x}",
+            env!("CARGO_PKG_VERSION"),
+            scene.name
+        );
         Ok(Runner {
             scene,
             scene_key,

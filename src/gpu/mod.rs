@@ -23,8 +23,8 @@ mod scene;
 mod select;
 
 pub use crate::backend::DispatchSplit;
-pub(crate) use device::{auto_uses_gpu, open_for};
 pub use device::{adapters, SOFTWARE_GPU};
+pub(crate) use device::{auto_uses_gpu, open_for};
 pub use scene::{GpuRay, GpuScene};
 pub use select::{select_adapter, AdapterListing, SELECT_GPU};
 
@@ -60,4 +60,3 @@ macro_rules! host_layout {
 }
 #[cfg(test)]
 pub(crate) use host_layout;
-

@@ -84,7 +84,13 @@ pub(super) struct GridBlocks {
 }
 
 impl GridBlocks {
-    pub(super) fn new(weighting: Weighting, (seed, key): (u64, u64), round: u32, n: u32, frame: Frame) -> Self {
+    pub(super) fn new(
+        weighting: Weighting,
+        (seed, key): (u64, u64),
+        round: u32,
+        n: u32,
+        frame: Frame,
+    ) -> Self {
         GridBlocks {
             weighting,
             random: Stream::new(seed, key),

@@ -25,8 +25,8 @@ mod point;
 use glam::Vec3;
 
 use super::{
-    Aov, AovSample, DistanceClamp, EstimateContext, Estimator, GBuffer, PixelJob, PixelPass,
-    PixelWorker, Prepared, Tally,
+    Aov, AovSample, DistanceClamp, EstimateContext, Estimator, GBuffer, PixelJob, PixelPass, PixelWorker,
+    Prepared, Tally,
 };
 use crate::accel::{GatherStart, Hit, RayCaster, PACKET};
 use crate::backend::Backend;
@@ -35,8 +35,8 @@ use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::report::{Details, DeviceDetails, GatherParameters, Parameters};
 use crate::sampling::{strata, Sampler, Weighting};
-use directions::{packets, sampler_directions, GridBlocks};
 pub(crate) use directions::Rounds;
+use directions::{packets, sampler_directions, GridBlocks};
 pub(crate) use point::PointGather;
 
 /// Default gather rays per pixel for `hmdist render`: an 8 × 8 stratified grid, a clean

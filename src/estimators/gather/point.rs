@@ -3,14 +3,11 @@
 
 use glam::Vec3;
 
+use super::directions::*;
 use crate::accel::{GatherStart, RayCaster, RayLanes, PACKET};
 use crate::estimators::{AovSample, DistanceClamp, HarmonicMean, Tally};
 use crate::progress::Progress;
-use crate::sampling::{
-    Progressive, Sampler, Stream,
-    Weighting,
-};
-use super::directions::*;
+use crate::sampling::{Progressive, Sampler, Stream, Weighting};
 
 /// One point's gather so far, round by round: H, its error bar and the AOVs.
 pub(crate) struct PointGather {

@@ -198,7 +198,11 @@ impl PhotonEstimator {
             absorption: f32,
         }
         let p = &self.params;
-        let (width, height) = if p.source == SourceKind::Camera { size } else { (0, 0) };
+        let (width, height) = if p.source == SourceKind::Camera {
+            size
+        } else {
+            (0, 0)
+        };
         let key = RenderKey {
             hmdist_version: env!("CARGO_PKG_VERSION").into(),
             scene: String::new(),
@@ -473,10 +477,15 @@ impl PixelWorker for PhotonWorker<'_> {
         let clamp = w.context.clamp;
         let mut mean = HarmonicMean::default();
         let (x, n) = (hit.point, hit.normal);
-        w.map
-            .gather(&mut self.scratch, x, n, w.nearest, max_radius, NORMAL_FILTER_COS, |d| {
-                mean.add(d, clamp)
-            });
+        w.map.gather(
+            &mut self.scratch,
+            x,
+            n,
+            w.nearest,
+            max_radius,
+            NORMAL_FILTER_COS,
+            |d| mean.add(d, clamp),
+        );
         mean.value()
     }
 }
