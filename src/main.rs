@@ -55,7 +55,7 @@ fn quiet_headless_vulkan() -> Option<std::path::PathBuf> {
             let pid = name
                 .to_str()
                 .and_then(|n| n.strip_prefix(PREFIX)?.parse::<u32>().ok());
-            if pid.is_some_and(|pid| !std::path::Path::new(&format!("/proc/{pid}")).exists()) {
+            if pid.is_some_and(|pid| !hmdist::files::process_alive(pid)) {
                 let _ = std::fs::remove_dir(entry.path()); // only if empty: nothing of anyone's lost
             }
         }

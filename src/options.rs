@@ -192,18 +192,13 @@ impl Shard {
     /// the AOVs), their bits in order: what a part's report records and `merge` checks its
     /// EXR against.
     pub fn rows_hash(&self, width: u32, channels: &[&[f32]]) -> String {
-        let width = width as usize;
-        let mut bytes = vec![];
-        for data in channels {
-            let rows = data.len() / width.max(1);
-            for row in (0..rows).filter(|&r| self.has_row(r as u32)) {
-                bytes.extend(
-                    data[row * width..(row + 1) * width]
-                        .iter()
-                        .flat_map(|v| v.to_bits().to_le_bytes()),
-                );
-            }
-        }
-        format!("{:016x}", crate::scene::stable_hash(&bytes))
+        let width = width.max(1) as usize;
+        let bytes = channels.iter().flat_map(|data| {
+            data.chunks_exact(width)
+                .enumerate()
+                .filter(|(row, _)| self.has_row(*row as u32))
+                .flat_map(|(_, row)| row.iter().flat_map(|v| v.to_bits().to_le_bytes()))
+        });
+        format!("{:016x}", crate::scene::stable_hash_of(bytes))
     }
 }

@@ -22,7 +22,7 @@ pub use crate::options::{RenderOptions, DEFAULT_SEED, DEFAULT_SIZE, MAX_PIXELS};
 use crate::progress::Progress;
 use crate::report::{BoundsReport, CameraReport, LightReport, RenderReport, Seconds};
 use crate::report::{Details, RenderKey, ShardReport};
-use crate::scene::Scene;
+use crate::scene::{Bounds, Scene};
 
 /// An HMD image and its report (SPEC §7).
 pub struct Rendered {
@@ -114,16 +114,18 @@ fn render_in_pool(
     let primary = primary_start.elapsed().as_secs_f64();
     crate::interrupt::check()?;
 
+    let bounds = scene.bounds();
     let context = EstimateContext {
         accel: &accel,
         scene,
         seed: options.seed,
-        clamp: DistanceClamp::for_diagonal(scene.diagonal(), options.max_distance),
+        clamp: DistanceClamp::for_diagonal(bounds.diagonal(), options.max_distance),
         aovs: &options.aovs,
         whole_image: options.shard.is_none(),
         bvh,
     };
     let setup = Setup {
+        bounds,
         bvh,
         background,
         accel_build,
@@ -158,10 +160,11 @@ fn primary_pass(accel: &Accel, scene: &Scene, options: &RenderOptions) -> (GBuff
     (gbuffer, background)
 }
 
-/// What every output of one pass shares: the BVH preset built, the background pixels, the
-/// set-up's seconds (BVH, primary rays, both), the distance clamp's floor, and the scene's
-/// content hash where the render is a shard.
+/// What every output of one pass shares: the scene's bounds, the BVH preset built, the
+/// background pixels, the set-up's seconds (BVH, primary rays, both), the distance clamp's
+/// floor, and the scene's content hash where the render is a shard.
 struct Setup {
+    bounds: Bounds,
     bvh: BuildQuality,
     background: usize,
     accel_build: f64,
@@ -181,7 +184,7 @@ fn output(
     estimate: Estimate,
     estimate_seconds: f64,
 ) -> Rendered {
-    let bounds = scene.bounds();
+    let bounds = &setup.bounds;
     let mut report = RenderReport {
         hmdist_version: env!("CARGO_PKG_VERSION").into(),
         method: estimator.method().into(),
@@ -196,7 +199,7 @@ fn output(
         triangles: scene.mesh.triangle_count(),
         l_diag: bounds.diagonal(),
         d_min: setup.d_min,
-        bounds: BoundsReport::from(&bounds),
+        bounds: BoundsReport::from(bounds),
         camera: CameraReport::from(&scene.camera),
         light: scene.light.as_ref().map(LightReport::from),
         display_scale: scene.display_scale,

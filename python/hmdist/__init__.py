@@ -72,16 +72,16 @@ def _vectors(name: str, array: Vectors, like: tuple[int, ...] | None = None
              ) -> tuple[npt.NDArray[np.float64], tuple[int, ...]]:
     """`array` ([..., 3] numbers: floats or integers) as a C-contiguous float64 [n, 3] array and
     its leading shape (() for one point of shape [3]), or ValueError naming `name`. With
-    `like`, its shape must be that."""
+    `like`, its leading shape must be that (another array's, as this returned it)."""
     a = np.asarray(array)
     if a.dtype.kind not in "iuf":
         raise ValueError(f"{name} must hold numbers (floats or integers), not {a.dtype}")
     if a.ndim == 0 or a.shape[-1] != 3:
         raise ValueError(f"{name} must have shape [n, 3] (or [3]), not {list(a.shape)}")
-    if like is not None and a.shape != like:
-        if a.ndim == 2 and len(like) == 2:
+    if like is not None and a.shape[:-1] != like:
+        if a.ndim == 2 and len(like) == 1:
             raise ValueError(f"{name} has {a.shape[0]} rows, expected {like[0]}")
-        raise ValueError(f"{name} has shape {list(a.shape)}, expected {list(like)}")
+        raise ValueError(f"{name} has shape {list(a.shape)}, expected {[*like, 3]}")
     flat = a.reshape(-1, 3)
     if not np.all(np.isfinite(flat)):
         bad = int(np.argwhere(~np.isfinite(flat))[0][0])
@@ -222,12 +222,11 @@ class Scene:
         `primary_hits` gives them, start the rays exactly as the image's. `backend` ("auto",
         "gpu", "gpu-software", "cpu") says where the rays are cast, as render's does."""
         p, lead = _vectors("points", points)
-        shape = np.shape(points)
-        n, _ = _vectors("normals", normals, like=shape)
+        n, _ = _vectors("normals", normals, like=lead)
         count = p.shape[0]
         k = None if keys is None else _integers("keys", np.reshape(keys, -1), (count,))
         t = None if triangles is None else _integers("triangles", np.reshape(triangles, -1), (count,))
-        e = None if errors is None else _vectors("errors", errors, like=shape)[0]
+        e = None if errors is None else _vectors("errors", errors, like=lead)[0]
         h = self._inner.hmd_at(p, n, _whole("rays", rays, 2**32 - 1), _whole("seed", seed, 2**64 - 1),
                                k, weighting, None if max_distance is None else float(max_distance),
                                t, e, backend)
@@ -237,7 +236,7 @@ class Scene:
         """Distance to the first hit along each ray (float32 [n]; inf for a miss); [...] for
         origins [..., 3], a float32 scalar for one ray [3]."""
         o, lead = _vectors("origins", origins)
-        d, _ = _vectors("directions", directions, like=np.shape(origins))
+        d, _ = _vectors("directions", directions, like=lead)
         return _shaped(self._inner.cast(o, d), lead)
 
     def __reduce__(self) -> tuple[Any, ...]:

@@ -239,7 +239,10 @@ impl Runner<'_> {
             ao_radius: None,
         };
         let stem = format!("{}-{:016x}", estimator.method(), key.digest());
-        self.adopt_legacy(&self.legacy_stem(estimator, seed, aovs), &stem);
+        // Only a cache an earlier run left can hold images under the old key.
+        if self.cache.is_dir() {
+            self.adopt_legacy(&self.legacy_stem(estimator, seed, aovs), &stem);
+        }
         stem
     }
 

@@ -206,29 +206,11 @@ fn remove_stale_temporaries(paths: &[&Path]) {
                 .strip_suffix(".tmp")
                 .or_else(|| rest.strip_suffix(".tmp.earlier"));
             if let Some(pid) = pid.and_then(|p| p.parse::<u32>().ok()) {
-                if pid != std::process::id() && !process_alive(pid) {
+                if pid != std::process::id() && !crate::files::process_alive(pid) {
                     let _ = std::fs::remove_file(entry.path());
                 }
             }
         }
-    }
-}
-
-/// Whether a process `pid` exists (where that cannot be told: assumed alive, nothing removed).
-fn process_alive(pid: u32) -> bool {
-    #[cfg(unix)]
-    {
-        let Ok(pid) = libc::pid_t::try_from(pid) else {
-            return true;
-        };
-        // SAFETY: signal 0 sends nothing; it only checks that the process exists.
-        let alive = unsafe { libc::kill(pid, 0) } == 0;
-        alive || std::io::Error::last_os_error().raw_os_error() != Some(libc::ESRCH)
-    }
-    #[cfg(not(unix))]
-    {
-        let _ = pid;
-        true
     }
 }
 

@@ -62,13 +62,18 @@ impl Scene {
             .map(|f| f.to_bits())
             .chain([self.light.is_some() as u32])
             .chain(self.mesh.indices.iter().flatten().copied());
-        stable_hash(&words.flat_map(u32::to_le_bytes).collect::<Vec<u8>>())
+        stable_hash_of(words.flat_map(u32::to_le_bytes))
     }
 }
 
 /// FNV-1a, 64-bit: a hash that is the same in every build and on every machine.
 pub fn stable_hash(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+    stable_hash_of(bytes.iter().copied())
+}
+
+/// [`stable_hash`] of bytes as they come, with no buffer to hold them.
+pub fn stable_hash_of(bytes: impl IntoIterator<Item = u8>) -> u64 {
+    bytes.into_iter().fold(0xcbf2_9ce4_8422_2325, |h, b| {
         (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
     })
 }
