@@ -238,6 +238,7 @@ fn output(
                 rows_hash: None,
             }),
         shards: None,
+        rays: estimator.parameters().number("rays").map(|rays| rays as u32),
         parameters: estimator.parameters(),
         details: estimate.details,
     };

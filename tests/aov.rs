@@ -448,7 +448,10 @@ fn hmdist_render_writes_each_aov_as_a_channel_of_its_name_and_lists_them() {
         json["channels"],
         serde_json::json!(["Y", "rays", "escaped", "relerr", "dmin"])
     );
-    assert_eq!(json["rounds"], 8, "relerr without --rounds takes 8 rounds");
+    assert_eq!(
+        json["parameters"]["rounds"], 8,
+        "relerr without --rounds takes 8 rounds"
+    );
     let exr = dir.join("hmd.exr");
     let rays = hmdist::image::exr::read_channel(&exr, "rays").unwrap();
     assert!(rays.data.iter().all(|&n| n == 16.0), "{:?}", rays.data);

@@ -241,10 +241,8 @@ fn gpu_fill_by_rays_is_the_cpu_backends_cube_map() {
     assert_eq!(details.lookups, surface * 64);
     assert_eq!(report.rays_cast, Some(surface * 64));
     assert_eq!((details.texels_rasterised, details.escaped_lookups), (0, 0));
-    assert_eq!(
-        report.parameters.cubemap.as_ref().unwrap().gpu_fill,
-        GpuFill::Rays
-    );
+    let params: hmdist::estimators::CubemapParams = report.parameters.typed().unwrap();
+    assert_eq!(params.gpu_fill, GpuFill::Rays);
 }
 
 #[test]

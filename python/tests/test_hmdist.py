@@ -255,7 +255,7 @@ def test_a_method_parameter_added_to_its_struct_is_a_keyword() -> None:
     s = hmdist.Scene.builtin("cube")
     grid, _ = s.render(size=(8, 6), rays=16, seed=4)
     sobol, report = s.render(size=(8, 6), rays=16, seed=4, sampler="sobol")
-    assert np.isfinite(sobol).all() and report["sampler"] == "sobol"
+    assert np.isfinite(sobol).all() and report["parameters"]["sampler"] == "sobol"
     assert not np.array_equal(grid, sobol)
     with pytest.raises(ValueError, match="sampler"):
         s.render(size=(8, 6), rays=16, sampler="halton")
@@ -269,8 +269,8 @@ def test_adaptive_takes_its_sampler_and_both_tolerances_as_keywords() -> None:
                                    tolerance=0.0, abs_tolerance=0.001, loosen=1.0, min_rays=64, max_rays=256)
     assert np.isfinite(image).all()
     assert ((aovs["rays"] >= 64) & (aovs["rays"] <= 256)).all()
-    assert report["abs_tolerance"] == pytest.approx(0.001)
-    assert report["loosen"] == 1.0 and report["sampler"] == "sobol"
+    assert report["parameters"]["abs_tolerance"] == pytest.approx(0.001)
+    assert report["parameters"]["loosen"] == 1.0 and report["parameters"]["sampler"] == "sobol"
     with pytest.raises(ValueError, match="tolerance"):
         s.render(size=(4, 4), method="adaptive", tolerance=0.0)
 
@@ -287,7 +287,8 @@ def test_the_cube_map_by_rays_is_a_keyword_and_agrees_with_the_cpu_backend() -> 
             raise
         pytest.skip(f"no GPU adapter: {e}")
     cpu, cpu_report = s.render(backend="cpu", **params)
-    assert report["gpu_fill"] == "rays" and "gpu_fill" not in cpu_report
+    assert report["parameters"]["gpu_fill"] == "rays"
+    assert cpu_report["parameters"]["gpu_fill"] == "raster"
     assert report["rays_cast"] == 16 * 16 * 16
     assert np.nanmax(np.abs(by_rays - cpu) / cpu) < 1e-4
     with pytest.raises(ValueError, match="gpu_fill"):

@@ -25,8 +25,8 @@ use crate::accel::GatherStart;
 use crate::accel::Hit;
 use crate::error::{Error, Result};
 use crate::progress::Progress;
-use crate::report::{AdaptiveParameters, Details, GatherParameters, Parameters};
-use crate::sampling::{strata, Sampler, Weighting};
+use crate::report::{Details, Parameters};
+use crate::sampling::{Sampler, Weighting};
 
 /// Default relative standard error of H at which a pixel stops.
 pub const DEFAULT_TOLERANCE: f32 = 0.02;
@@ -211,7 +211,22 @@ impl Adaptive {
         Ok(Adaptive { ao_radius, ..self })
     }
 
-    fn per_round(&self) -> u32 {
+    /// The parameters this gather is built from ([`AdaptiveParams::build`]).
+    pub fn params(&self) -> AdaptiveParams {
+        AdaptiveParams {
+            weighting: self.weighting,
+            sampler: self.sampler,
+            tolerance: self.tolerance,
+            abs_tolerance: self.abs_tolerance,
+            loosen: self.loosen,
+            min_rays: self.min_rays,
+            max_rays: self.max_rays,
+            ao_radius: self.ao_radius,
+        }
+    }
+
+    /// Rays per round: `min_rays / 8`.
+    pub fn per_round(&self) -> u32 {
         self.min_rays / FIRST_ROUNDS
     }
 
@@ -234,26 +249,7 @@ impl Estimator for Adaptive {
     }
 
     fn parameters(&self) -> Parameters {
-        let grid = strata(self.per_round());
-        Parameters {
-            // The rays per pixel vary: see rays_cast and the rays AOV.
-            rays: None,
-            gather: Some(GatherParameters {
-                weighting: self.weighting,
-                strata: [grid.0, grid.1],
-                rounds: FIRST_ROUNDS,
-                sampler: self.sampler,
-            }),
-            adaptive: Some(AdaptiveParameters {
-                tolerance: self.tolerance,
-                abs_tolerance: self.abs_tolerance,
-                loosen: self.loosen,
-                min_rays: self.min_rays,
-                max_rays: self.max_rays,
-                rays_per_round: self.per_round(),
-            }),
-            ..Parameters::default()
-        }
+        Parameters::of(&self.params(), &["ao_radius"])
     }
 
     fn aovs(&self) -> &'static [Aov] {

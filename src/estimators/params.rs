@@ -5,6 +5,7 @@ use serde::de::DeserializeOwned;
 use serde::Serialize;
 
 use super::aov::Aov;
+use crate::backend::{Backend, GpuFill};
 
 /// With the `cli` feature, a method's parameters are also clap flags (derived on the struct).
 #[cfg(feature = "cli")]
@@ -27,4 +28,8 @@ pub trait MethodParams:
     /// Defaults that depend on the AOVs asked for (`gather`: 8 rounds where `relerr` is asked
     /// for and no rounds are named).
     fn for_aovs(&mut self, _aovs: &[Aov]) {}
+
+    /// Where the method runs, for a method that has a backend (`gather`, `cubemap`); how the
+    /// GPU fills a cube map's texels, for `cubemap`. The others ignore them.
+    fn on_backend(&mut self, _backend: Backend, _gpu_fill: GpuFill) {}
 }

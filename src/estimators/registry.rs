@@ -290,7 +290,7 @@ mod tests {
         let new = build("photon1", &serde_json::json!({"nearest": 32}), &[]).unwrap();
         let old = build("photon1", &serde_json::json!({"gather": 32}), &[]).unwrap();
         assert_eq!(new.parameters(), old.parameters());
-        assert_eq!(new.parameters().photon.unwrap().gather, 32);
+        assert_eq!(new.parameters().number("nearest"), Some(32.0));
     }
 
     #[test]
@@ -347,8 +347,8 @@ mod tests {
             .unwrap()
             .build_from_flags(&matches, &[])
             .unwrap();
-        assert_eq!(cubemap.parameters().rays, Some(16));
-        assert_eq!(cubemap.parameters().cubemap.unwrap().cube_res, 8);
+        assert_eq!(cubemap.parameters().number("rays"), Some(16.0));
+        assert_eq!(cubemap.parameters().number("cube_res"), Some(8.0));
     }
 
     #[test]

@@ -10,7 +10,6 @@ use crate::image::{exr, write_atomically, HmdImage};
 use crate::progress::Silent;
 use crate::render::{render, RenderOptions};
 use crate::report::{RenderKey, RenderReport};
-use crate::scene::stable_hash;
 use crate::shard::Shard;
 
 use super::presets::PARTS;
@@ -215,11 +214,25 @@ impl Runner<'_> {
     /// size: the method and the [`RenderKey::digest`] of the image's key as this run asks for
     /// it (the backend and BVH preset as requested: `auto` stays `auto`), the key `merge`
     /// compares and photon maps are checked by. An image cached under the key of earlier
-    /// versions ([`Runner::legacy_stem`]) is renamed to this one when first asked for, so
+    /// versions ([`Runner::legacy_stems`]) is renamed to this one when first asked for, so
     /// caches on disk stay usable.
     pub(super) fn stem(&self, estimator: &dyn Estimator, seed: u64, aovs: &[Aov]) -> String {
+        let key = self.key(estimator, seed, aovs);
+        let stem = format!("{}-{:016x}", estimator.method(), key.digest());
+        // Only a cache an earlier run left can hold images under the old keys.
+        if self.cache.is_dir() {
+            for legacy in self.legacy_stems(estimator, &key) {
+                self.adopt_legacy(&legacy, &stem);
+            }
+        }
+        stem
+    }
+
+    /// The key of the image `estimator` renders with `seed` and `aovs` at the preset's size,
+    /// as this run asks for it (the backend and BVH preset as requested: `auto` stays `auto`).
+    pub(super) fn key(&self, estimator: &dyn Estimator, seed: u64, aovs: &[Aov]) -> RenderKey {
         let options = self.render_options(seed, aovs);
-        let key = RenderKey {
+        RenderKey {
             hmdist_version: env!("CARGO_PKG_VERSION").into(),
             scene: self.scene.name.clone(),
             scene_content: format!("{:016x}", self.scene_content),
@@ -237,31 +250,7 @@ impl Runner<'_> {
             max_distance: options.max_distance,
             aovs: aovs.iter().map(|a| a.name().into()).collect(),
             ao_radius: None,
-        };
-        let stem = format!("{}-{:016x}", estimator.method(), key.digest());
-        // Only a cache an earlier run left can hold images under the old key.
-        if self.cache.is_dir() {
-            self.adopt_legacy(&self.legacy_stem(estimator, seed, aovs), &stem);
         }
-        stem
-    }
-
-    /// The cache stem earlier versions gave the image: a hash of the scene's key, the method,
-    /// its parameters, the size, the seed, the backend as requested and the AOVs. Read only, to
-    /// find images cached before [`Runner::stem`]'s key.
-    pub(super) fn legacy_stem(&self, estimator: &dyn Estimator, seed: u64, aovs: &[Aov]) -> String {
-        let size = self.params.size;
-        let parameters = serde_json::to_string(&estimator.parameters()).expect("parameters serialise");
-        let mut key = format!(
-            "{}|{}|{parameters}|{size}x{size}|{seed}|{:?}",
-            self.scene_key,
-            estimator.method(),
-            self.backend,
-        );
-        for aov in aovs {
-            key += &format!("|{}", aov.name());
-        }
-        format!("{}-{:016x}", estimator.method(), stable_hash(key.as_bytes()))
     }
 
     /// Renames the cached files of `legacy` (the image, and any of its parts) to `stem`'s,
@@ -317,7 +306,15 @@ mod tests {
 
     use super::*;
     use crate::estimators::Backend;
+    use crate::estimators::GatherParams;
     use crate::experiments::presets::Preset;
+
+    fn gather_params(rays: u32) -> GatherParams {
+        GatherParams {
+            rays,
+            ..GatherParams::default()
+        }
+    }
 
     /// The parts of an image that an interrupted run cached count, in the run that finishes
     /// the image, with the seconds their reports give; the parts this run renders do not.
@@ -332,7 +329,7 @@ mod tests {
             .with_backend(Backend::Cpu)
             .with_part_rays(1);
         let estimator = runner
-            .method_estimator("gather", &serde_json::json!({ "rays": 16 }), &[])
+            .method_estimator("gather", &gather_params(16), &[])
             .unwrap();
         let stem = runner.stem(estimator.as_ref(), 1, &[]);
         let options = runner.render_options(1, &[]);
@@ -372,10 +369,10 @@ mod tests {
         let _ = std::fs::remove_dir_all(&out);
     }
 
-    /// An image cached under the key of earlier versions (the whole image, or its parts) is
-    /// found, not rendered again, and takes the new key's name.
+    /// An image cached under either key of earlier versions is found, not rendered again,
+    /// and takes the new key's name.
     #[test]
-    fn an_image_cached_under_the_old_key_is_found() {
+    fn an_image_cached_under_an_old_key_is_found() {
         let out = std::env::temp_dir().join(format!("hmdist-legacy-key-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&out);
         let runner = || {
@@ -386,26 +383,22 @@ mod tests {
                 .with_backend(Backend::Cpu)
         };
         let first = runner();
-        let estimator = first
-            .method_estimator("gather", &serde_json::json!({ "rays": 8 }), &[])
-            .unwrap();
+        let estimator = first.method_estimator("gather", &gather_params(8), &[]).unwrap();
         let (_, report) = first.image(estimator.as_ref(), 1).unwrap();
-        let (stem, legacy) = (
-            first.stem(estimator.as_ref(), 1, &[]),
-            first.legacy_stem(estimator.as_ref(), 1, &[]),
-        );
-        assert_ne!(stem, legacy, "the key changed");
-        // As an earlier version would have left it: the image under the old name, and a part
-        // of another image under its old name.
-        let (new_exr, new_json) = first.cache_paths(&stem);
-        let (old_exr, old_json) = first.cache_paths(&legacy);
-        std::fs::rename(&new_exr, &old_exr).unwrap();
-        std::fs::rename(&new_json, &old_json).unwrap();
-        let second = runner();
-        let (_, found) = second.image(estimator.as_ref(), 1).unwrap();
-        // A render again would have taken other seconds.
-        assert_eq!(found.seconds.total.to_bits(), report.seconds.total.to_bits());
-        assert!(new_json.exists() && !old_json.exists(), "renamed to the new key");
+        let stem = first.stem(estimator.as_ref(), 1, &[]);
+        let key = first.key(estimator.as_ref(), 1, &[]);
+        for legacy in first.legacy_stems(estimator.as_ref(), &key) {
+            assert_ne!(stem, legacy, "the key changed");
+            // As an earlier version would have left it: the image under the old name.
+            let (new_exr, new_json) = first.cache_paths(&stem);
+            let (old_exr, old_json) = first.cache_paths(&legacy);
+            std::fs::rename(&new_exr, &old_exr).unwrap();
+            std::fs::rename(&new_json, &old_json).unwrap();
+            let (_, found) = runner().image(estimator.as_ref(), 1).unwrap();
+            // A render again would have taken other seconds.
+            assert_eq!(found.seconds.total.to_bits(), report.seconds.total.to_bits());
+            assert!(new_json.exists() && !old_json.exists(), "renamed to the new key");
+        }
         let _ = std::fs::remove_dir_all(&out);
     }
 }

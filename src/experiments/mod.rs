@@ -16,7 +16,8 @@
 //!
 //! The module is an index; its files point down: [`catalogue`] (the list, running it) above
 //! the studies (`rays`, `photons`, `adaptive`, `cost`) and the HTML report, above the
-//! [`Runner`] (`runner.rs`, with `cache.rs` and `planning.rs`), above the vocabulary
+//! [`Runner`] (`runner.rs`, with `cache.rs`, `legacy.rs` (earlier versions' cache keys) and
+//! `planning.rs`), above the vocabulary
 //! ([`presets`], [`Section`], [`Table`], [`plan`], `plot`, `grid`, [`paper`]).
 
 mod adaptive;
@@ -24,6 +25,7 @@ mod cache;
 pub mod catalogue;
 mod cost;
 mod grid;
+mod legacy;
 pub mod paper;
 mod photons;
 pub mod plan;

@@ -18,7 +18,10 @@
 use serde::{Deserialize, Serialize};
 
 use super::table::Table;
+use crate::estimators::photon::PhotonMethod;
+use crate::estimators::{AdaptiveParams, CubemapParams, PhotonParams};
 use crate::report::{Parameters, RenderReport};
+use crate::sampling::Sampler;
 
 /// Rows a calibration renders (every `size / CALIBRATION_ROWS`-th row of the image).
 pub const CALIBRATION_ROWS: u32 = 8;
@@ -140,20 +143,25 @@ pub fn extrapolate(report: &RenderReport, scale: f64) -> f64 {
 pub fn describe(method: &str, parameters: &Parameters, seed: u64, pixels: u64) -> (String, String) {
     let mut what = vec![method.to_string()];
     let mut work = String::new();
-    if let Some(rays) = parameters.rays {
+    if let Some(rays) = parameters.number("rays") {
         what.push(format!("N = {rays}"));
-        work = format!("{:.3e} rays", pixels as f64 * rays as f64);
+        work = format!("{:.3e} rays", pixels as f64 * rays);
     }
-    if let Some(c) = &parameters.cubemap {
+    if let Some(c) = parameters
+        .typed::<CubemapParams>()
+        .filter(|_| method == "cubemap")
+    {
         what.push(format!("R = {}", c.cube_res));
-        if let Some(rays) = parameters.rays {
-            work = format!("{:.3e} lookups", pixels as f64 * rays as f64);
-        }
+        work = format!("{:.3e} lookups", pixels as f64 * c.rays as f64);
     }
-    if let Some(g) = parameters.gather.as_ref().filter(|g| !g.sampler.is_grid()) {
-        what.push(format!("{} sampler", g.sampler.name()));
+    let sampler = parameters.get("sampler").and_then(|s| s.as_str());
+    if let Some(sampler) = sampler.filter(|&s| s != Sampler::Grid.name()) {
+        what.push(format!("{sampler} sampler"));
     }
-    if let Some(a) = &parameters.adaptive {
+    if let Some(a) = parameters
+        .typed::<AdaptiveParams>()
+        .filter(|_| method == "adaptive")
+    {
         let mut stop = format!("tolerance {}", a.tolerance);
         if a.abs_tolerance != 0.0 {
             stop += &format!(", absolute tolerance {}", a.abs_tolerance);
@@ -164,18 +172,21 @@ pub fn describe(method: &str, parameters: &Parameters, seed: u64, pixels: u64) -
         what.push(format!("{stop} (N ≤ {})", a.max_rays));
         work = format!("≤ {:.3e} rays", pixels as f64 * a.max_rays as f64);
     }
-    if let Some(p) = &parameters.photon {
+    if let Some(p) = parameters
+        .typed::<PhotonParams>()
+        .filter(|_| PhotonMethod::from_name(method).is_some())
+    {
         what.push(format!(
             "{} photons, K = {}, {} source, {} bounces",
             p.photons,
-            p.gather,
+            p.nearest,
             p.source.name(),
             p.max_bounces
         ));
         work = format!(
             "{:.3e} photons, {:.3e} photons gathered",
             p.photons as f64,
-            pixels as f64 * p.gather as f64
+            pixels as f64 * p.nearest as f64
         );
     }
     what.push(format!("seed {seed}"));
@@ -391,17 +402,14 @@ mod tests {
 
     #[test]
     fn a_description_tells_apart_images_that_differ_in_sampler_or_stop() {
-        use crate::report::{AdaptiveParameters, GatherParameters};
-        let gather = |sampler| GatherParameters {
-            weighting: crate::sampling::Weighting::Cosine,
-            strata: [8, 4],
-            rounds: 1,
-            sampler,
-        };
-        let fixed = |sampler| Parameters {
-            rays: Some(32),
-            gather: Some(gather(sampler)),
-            ..Parameters::default()
+        use crate::estimators::{AdaptiveParams, GatherParams};
+        let fixed = |sampler| {
+            let params = GatherParams {
+                rays: 32,
+                sampler,
+                ..GatherParams::default()
+            };
+            Parameters::of(&params, &[])
         };
         let (grid, work) = describe("gather", &fixed(crate::sampling::Sampler::Grid), 1, 100);
         assert_eq!(
@@ -410,18 +418,18 @@ mod tests {
         );
         let (sobol, _) = describe("gather", &fixed(crate::sampling::Sampler::Sobol), 1, 100);
         assert_eq!(sobol, "gather, N = 32, sobol sampler, seed 1");
-        let adaptive = Parameters {
-            gather: Some(gather(crate::sampling::Sampler::Sobol)),
-            adaptive: Some(AdaptiveParameters {
+        let adaptive = Parameters::of(
+            &AdaptiveParams {
+                sampler: crate::sampling::Sampler::Sobol,
                 tolerance: 0.0,
                 abs_tolerance: 0.001,
                 loosen: 1.0,
                 min_rays: 64,
                 max_rays: 4096,
-                rays_per_round: 8,
-            }),
-            ..Parameters::default()
-        };
+                ..AdaptiveParams::default()
+            },
+            &[],
+        );
         let (stop, _) = describe("adaptive", &adaptive, 1, 100);
         assert_eq!(
             stop,

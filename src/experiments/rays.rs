@@ -160,8 +160,9 @@ fn backend_of(report: &crate::report::RenderReport) -> String {
         .device
         .as_ref()
         .map_or("?".into(), |d| d.backend.clone());
-    match &report.parameters.cubemap {
-        Some(c) if c.gpu_fill == GpuFill::Rays && backend == "gpu" => format!("{backend}, rays"),
+    let fill = report.parameters.typed::<CubemapParams>().map(|c| c.gpu_fill);
+    match fill {
+        Some(GpuFill::Rays) if backend == "gpu" => format!("{backend}, rays"),
         _ => backend,
     }
 }

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use crate::accel::Kernel;
 use crate::error::{Error, Result};
 use crate::estimators::cubemap::GpuFill;
-use crate::estimators::{registry, Aov, Backend, CubemapParams, Estimator, GatherParams};
+use crate::estimators::{registry, Aov, Backend, CubemapParams, Estimator, GatherParams, MethodParams};
 use crate::image::{exr, write_atomically, HmdImage};
 use crate::progress::{Progress, Silent};
 use crate::render::RenderOptions;
@@ -254,12 +254,12 @@ impl<'a> Runner<'a> {
     }
 
     /// The image method `method` (a registry name) renders with `params` (its parameter
-    /// struct, or an object naming some of them) and `seed`, on the runner's backend where the
-    /// method has one: see [`Runner::image`].
+    /// struct) and `seed`, on the runner's backend where the method has one: see
+    /// [`Runner::image`].
     pub fn method_image(
         &self,
         method: &str,
-        params: &impl serde::Serialize,
+        params: &impl MethodParams,
         seed: u64,
     ) -> Result<(HmdImage, RenderReport)> {
         let (image, report, _) = self.method_image_with(method, params, seed, &[])?;
@@ -271,7 +271,7 @@ impl<'a> Runner<'a> {
     pub fn method_image_with(
         &self,
         method: &str,
-        params: &impl serde::Serialize,
+        params: &impl MethodParams,
         seed: u64,
         aovs: &[Aov],
     ) -> Result<(HmdImage, RenderReport, Vec<HmdImage>)> {
@@ -281,23 +281,15 @@ impl<'a> Runner<'a> {
 
     /// The estimator of method `method` (a registry name) with `params` and `aovs`, on the
     /// runner's backend where the method has one.
-    pub(super) fn method_estimator(
+    pub(super) fn method_estimator<P: MethodParams>(
         &self,
         method: &str,
-        params: &impl serde::Serialize,
+        params: &P,
         aovs: &[Aov],
     ) -> Result<Box<dyn Estimator>> {
-        let entry = registry::method(method)?;
-        let mut params = registry::object(params)?;
-        if entry.reads("backend") {
-            let backend = serde_json::to_value(self.backend).expect("a backend serialises");
-            params.insert("backend".into(), backend);
-        }
-        if entry.reads("gpu_fill") {
-            let fill = serde_json::to_value(self.gpu_fill).expect("a fill serialises");
-            params.insert("gpu_fill".into(), fill);
-        }
-        entry.build(&params, aovs)
+        let mut params = params.clone();
+        params.on_backend(self.backend, self.gpu_fill);
+        registry::method(method)?.build(&registry::object(&params)?, aovs)
     }
 
     /// This runner taking its reference image (gather with the preset's reference ray count

@@ -22,7 +22,7 @@ use crate::error::Result;
 #[cfg(feature = "gpu")]
 use crate::gpu::hemicube::HemicubeGpu;
 use crate::progress::Progress;
-use crate::report::{CubemapParameters, Parameters};
+use crate::report::Parameters;
 pub use cpu::sweep;
 pub use hemicube::{Face, Hemicube};
 pub use params::{Cubemap, CubemapParams, DEFAULT_CUBE_RES, MAX_CUBE_RES};
@@ -33,13 +33,7 @@ impl Estimator for Cubemap {
     }
 
     fn parameters(&self) -> Parameters {
-        Parameters {
-            cubemap: Some(CubemapParameters {
-                cube_res: self.hemicube.resolution,
-                gpu_fill: self.gpu_fill,
-            }),
-            ..self.gather.parameters()
-        }
+        Parameters::of(&self.params(), &["backend"])
     }
 
     fn expected_rays(&self, pixels: u64) -> u64 {

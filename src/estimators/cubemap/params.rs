@@ -58,7 +58,12 @@ impl Default for CubemapParams {
     }
 }
 
-impl crate::estimators::params::MethodParams for CubemapParams {}
+impl crate::estimators::params::MethodParams for CubemapParams {
+    fn on_backend(&mut self, backend: Backend, gpu_fill: GpuFill) {
+        self.backend = backend;
+        self.gpu_fill = gpu_fill;
+    }
+}
 
 impl CubemapParams {
     /// The cube map these parameters name, checked.
@@ -81,6 +86,18 @@ pub struct Cubemap {
 }
 
 impl Cubemap {
+    /// The parameters this cube map is built from ([`CubemapParams::build`]).
+    pub fn params(&self) -> CubemapParams {
+        let gather = self.gather.params();
+        CubemapParams {
+            rays: gather.rays,
+            weighting: gather.weighting,
+            cube_res: self.hemicube.resolution,
+            backend: self.backend,
+            gpu_fill: self.gpu_fill,
+        }
+    }
+
     /// `gather`'s directions looked up in hemicubes of per-quadrant resolution `resolution`
     /// (1 to [`MAX_CUBE_RES`]), built by `backend`.
     pub fn new(gather: Gather, resolution: u32, backend: Backend) -> Result<Self> {

@@ -33,7 +33,7 @@ use crate::backend::Backend;
 pub use crate::backend::DispatchSplit;
 use crate::error::{Error, Result};
 use crate::progress::Progress;
-use crate::report::{Details, DeviceDetails, GatherParameters, Parameters};
+use crate::report::{Details, DeviceDetails, Parameters};
 use crate::sampling::{strata, Sampler, Weighting};
 pub(crate) use directions::Rounds;
 use directions::{packets, sampler_directions, GridBlocks};
@@ -112,6 +112,10 @@ impl Default for GatherParams {
 }
 
 impl super::params::MethodParams for GatherParams {
+    fn on_backend(&mut self, backend: Backend, _: crate::backend::GpuFill) {
+        self.backend = backend;
+    }
+
     fn for_aovs(&mut self, aovs: &[super::Aov]) {
         if aovs.contains(&super::Aov::Relerr) {
             self.rounds.get_or_insert(DEFAULT_ERROR_ROUNDS);
@@ -338,6 +342,18 @@ impl Gather {
         ))
     }
 
+    /// The parameters this gather is built from ([`GatherParams::build`]), its rounds filled in.
+    pub fn params(&self) -> GatherParams {
+        GatherParams {
+            rays: self.rays,
+            weighting: self.weighting,
+            sampler: self.sampler,
+            rounds: Some(self.rounds),
+            ao_radius: self.ao_radius,
+            backend: self.backend,
+        }
+    }
+
     /// H from `start` with the random numbers of `key`, and how many of its rays escaped.
     pub(crate) fn at<R: RayCaster>(
         &self,
@@ -354,17 +370,6 @@ impl Gather {
         }
         (point.mean.value(), point.escaped)
     }
-
-    /// This gather's entries in the report.
-    pub(crate) fn report_parameters(&self) -> GatherParameters {
-        let grid = strata(self.rays / self.rounds);
-        GatherParameters {
-            weighting: self.weighting,
-            strata: [grid.0, grid.1],
-            rounds: self.rounds,
-            sampler: self.sampler,
-        }
-    }
 }
 
 impl Estimator for Gather {
@@ -373,11 +378,7 @@ impl Estimator for Gather {
     }
 
     fn parameters(&self) -> Parameters {
-        Parameters {
-            rays: Some(self.rays),
-            gather: Some(self.report_parameters()),
-            ..Parameters::default()
-        }
+        Parameters::of(&self.params(), &["backend", "ao_radius"])
     }
 
     fn aovs(&self) -> &'static [Aov] {

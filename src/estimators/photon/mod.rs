@@ -23,7 +23,7 @@ use crate::error::{Error, Result};
 use crate::options::{in_pool, RenderOptions};
 use crate::progress::Progress;
 pub use crate::report::SourceKind;
-use crate::report::{Details, Parameters, PhaseSeconds, PhotonDetails, PhotonParameters, RenderKey};
+use crate::report::{Details, Parameters, PhaseSeconds, PhotonDetails, RenderKey};
 use crate::scene::Scene;
 pub use map::{GatherScratch, MapHeader, PhotonMap, PhotonMethod};
 pub use trace::{trace_photons, PathRules, PhotonSource, PhotonTrace, TracedPhoton};
@@ -208,12 +208,15 @@ impl PhotonEstimator {
             scene: String::new(),
             scene_content: format!("{:016x}", scene.fingerprint()),
             method: self.method.name().into(),
-            parameters: Parameters::of(&MapParameters {
-                photons: p.photons,
-                source: p.source,
-                max_bounces: p.max_bounces,
-                absorption: p.absorption,
-            }),
+            parameters: Parameters::of(
+                &MapParameters {
+                    photons: p.photons,
+                    source: p.source,
+                    max_bounces: p.max_bounces,
+                    absorption: p.absorption,
+                },
+                &[],
+            ),
             backend: "cpu".into(),
             adapter_class: None,
             bvh: bvh.name().into(),
@@ -329,21 +332,7 @@ impl Estimator for PhotonEstimator {
     }
 
     fn parameters(&self) -> Parameters {
-        let p = &self.params;
-        Parameters {
-            // No gather rays: H comes from the photon map.
-            rays: None,
-            photon: Some(PhotonParameters {
-                photons: p.photons,
-                gather: p.nearest,
-                source: p.source,
-                max_bounces: p.max_bounces,
-                absorption: p.absorption,
-                max_radius: p.max_radius,
-                normal_filter_cos: NORMAL_FILTER_COS,
-            }),
-            ..Parameters::default()
-        }
+        Parameters::of(&self.params, &["photon_map"])
     }
 
     /// Traces the photons and builds the map; the driver then gathers per pixel.

@@ -3,10 +3,14 @@
 //! and which therefore keep their names; fields that a method does not measure are `null`
 //! (or absent, for a method's own groups), never zero.
 
+pub mod legacy;
+
 use serde::{Deserialize, Serialize};
 
-use crate::backend::GpuFill;
-use crate::sampling::{Sampler, Weighting};
+use std::collections::BTreeMap;
+
+use serde_json::Value;
+
 use crate::scene::{Bounds, Camera, SpotLight};
 
 /// One rendered image's report: the JSON sidecar.
@@ -64,8 +68,11 @@ pub struct RenderReport {
     /// A merged image's shards and their timings; absent otherwise.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub shards: Option<Vec<ShardTiming>>,
+    /// Gather rays per pixel N, where the method casts a fixed number (`null` for the photon
+    /// methods and adaptive): the SPEC's key, beside `parameters.rays`.
+    pub rays: Option<u32>,
     /// The method's parameters.
-    #[serde(flatten)]
+    #[serde(default)]
     pub parameters: Parameters,
     /// The method's own figures.
     #[serde(flatten)]
@@ -84,19 +91,23 @@ impl RenderReport {
     pub fn summary(&self) -> String {
         let r = self;
         let p = &r.parameters;
-        let rays = p.rays.unwrap_or(0);
+        let rays = r.rays.unwrap_or(0);
         let backend = r.details.device.as_ref().map_or("cpu", |d| d.backend.as_str());
-        let what = match (&r.details.cubemap, &r.details.photon, &p.photon, &p.cubemap) {
-            _ if p.adaptive.is_some() => format!(
+        let number = |name| p.number(name).unwrap_or(f64::NAN);
+        let what = match (&r.details.cubemap, &r.details.photon) {
+            _ if r.method == "adaptive" => format!(
                 "tolerance {}, {:.1} rays/pixel on average, {:.2} Mrays/s",
-                p.adaptive.as_ref().map_or(f32::NAN, |a| a.tolerance),
+                number("tolerance") as f32,
                 r.details.mean_rays_per_pixel.unwrap_or(f64::NAN),
                 r.mrays_per_s.unwrap_or(f64::NAN)
             ),
-            (Some(_), _, _, Some(cp)) => format!("{rays} rays/pixel, R = {}, {backend} backend", cp.cube_res),
-            (_, Some(d), Some(pp), _) => format!(
+            (Some(_), _) => format!("{rays} rays/pixel, R = {}, {backend} backend", number("cube_res")),
+            (_, Some(d)) => format!(
                 "{} photons, K = {}, {} holes, {:.0} queries/s",
-                d.photons_stored, pp.gather, d.holes, d.gather_queries_per_s
+                d.photons_stored,
+                number("nearest"),
+                d.holes,
+                d.gather_queries_per_s
             ),
             _ => format!(
                 "{rays} rays/pixel, {:.2} Mrays/s, {backend} backend",
@@ -124,8 +135,25 @@ impl RenderReport {
     pub fn read(path: &std::path::Path) -> crate::error::Result<RenderReport> {
         use crate::error::Error;
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, "read", e))?;
-        serde_json::from_str(&text)
-            .map_err(|e| Error::file(path, format!("not an hmdist render report: {e}")))
+        /// A report as a file holds it: one written before the parameters were an object
+        /// has them at the top level.
+        #[derive(Deserialize)]
+        struct OnDisk {
+            #[serde(flatten)]
+            report: RenderReport,
+            #[serde(flatten)]
+            legacy: legacy::FlatParameters,
+        }
+        let OnDisk { mut report, legacy } = serde_json::from_str(&text)
+            .map_err(|e| Error::file(path, format!("not an hmdist render report: {e}")))?;
+        if report.parameters.0.is_empty() && legacy.is_some() {
+            let mut fields = legacy.fields(&report.method);
+            if let Some(rays) = report.rays {
+                fields.insert("rays".into(), rays.into());
+            }
+            report.parameters = Parameters(fields);
+        }
+        Ok(report)
     }
 }
 
@@ -166,8 +194,9 @@ pub struct RenderKey {
     pub scene_content: String,
     /// The estimator's registry name.
     pub method: String,
-    /// The method's parameters, as the report writes them.
-    #[serde(flatten)]
+    /// The method's parameters, as the report writes them (empty in a key written before
+    /// they were an object of their own).
+    #[serde(default)]
     pub parameters: Parameters,
     /// Where it ran: `cpu` or `gpu` (resolved: never `auto`). The experiment cache, which
     /// keys an image before it is rendered, puts the backend it asks for (`auto` too).
@@ -352,117 +381,40 @@ pub struct PhaseSeconds {
     pub gpu_readback: Option<f64>,
 }
 
-/// A method's parameters. `rays` is there for every method (`null` for the photon methods);
-/// the groups are there for the methods that have them.
+/// A method's parameters: the fields of its parameter struct (`GatherParams`,
+/// `CubemapParams`, ...) by the names its flags and Python's keywords have, as one JSON
+/// object (`"parameters"` in the report), less what the report says elsewhere (the backend, the
+/// `ao` radius, a photon map file's path). What the estimator itself holds, after the defaults
+/// that depend on the AOVs are filled in; the experiments read it back into the struct.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Parameters {
-    /// Gather rays per pixel N.
-    pub rays: Option<u32>,
-    /// `gather` and `cubemap`.
-    #[serde(flatten)]
-    pub gather: Option<GatherParameters>,
-    /// `cubemap`.
-    #[serde(flatten)]
-    pub cubemap: Option<CubemapParameters>,
-    /// `photon1` and `photon2`.
-    #[serde(flatten)]
-    pub photon: Option<PhotonParameters>,
-    /// `adaptive`.
-    #[serde(flatten)]
-    pub adaptive: Option<AdaptiveParameters>,
-    /// Any other method's parameters, by name, beside the groups above: what
-    /// [`Parameters::of`] fills in for an estimator that has no group of its own.
-    #[serde(flatten)]
-    pub other: std::collections::BTreeMap<String, serde_json::Value>,
-}
+#[serde(transparent)]
+pub struct Parameters(BTreeMap<String, Value>);
 
 impl Parameters {
-    /// `params` (a method's parameter struct), every field under its own name: the report's
-    /// parameters of an estimator with no group of its own here.
-    pub fn of(params: &impl Serialize) -> Parameters {
-        let other = match serde_json::to_value(params) {
-            Ok(serde_json::Value::Object(map)) => map.into_iter().collect(),
-            _ => Default::default(),
+    /// `params` (a method's parameter struct) every field under its own name, less `omit`.
+    pub fn of(params: &impl Serialize, omit: &[&str]) -> Parameters {
+        let mut fields: BTreeMap<String, Value> = match serde_json::to_value(params) {
+            Ok(Value::Object(map)) => map.into_iter().collect(),
+            _ => BTreeMap::new(),
         };
-        Parameters {
-            other,
-            ..Parameters::default()
-        }
+        fields.retain(|name, _| !omit.contains(&name.as_str()));
+        Parameters(fields)
     }
-}
 
-/// When adaptive gathering stops.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct AdaptiveParameters {
-    /// A pixel stops once the standard error of its H is below `(tolerance · H +
-    /// abs_tolerance · l_diag) · (N / min_rays)^loosen`.
-    pub tolerance: f32,
-    /// The absolute part of the stop, in units of the scene's diagonal; absent where 0 (every
-    /// report written before it).
-    #[serde(default, skip_serializing_if = "is_zero")]
-    pub abs_tolerance: f32,
-    /// The stop's tolerance grows as `(N / min_rays)^loosen` with a pixel's rays N; absent
-    /// where 0 (fixed).
-    #[serde(default, skip_serializing_if = "is_zero")]
-    pub loosen: f32,
-    /// Rays before the first check (8 rounds).
-    pub min_rays: u32,
-    /// A pixel never casts more.
-    pub max_rays: u32,
-    /// Rays per round.
-    pub rays_per_round: u32,
-}
+    /// The value of parameter `name`, where the method has it.
+    pub fn get(&self, name: &str) -> Option<&Value> {
+        self.0.get(name)
+    }
 
-fn is_zero(x: &f32) -> bool {
-    *x == 0.0
-}
+    /// Parameter `name` as a number, where the method has it and it is one.
+    pub fn number(&self, name: &str) -> Option<f64> {
+        self.get(name).and_then(Value::as_f64)
+    }
 
-/// The gather directions.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct GatherParameters {
-    /// Direction weighting.
-    pub weighting: Weighting,
-    /// The stratification grid `a × b` of one round (a · b = N / rounds).
-    pub strata: [u32; 2],
-    /// Independent rounds the rays are cast in (1: one grid); adaptive: the rounds before
-    /// its first check.
-    pub rounds: u32,
-    /// How the directions fill the hemisphere; absent for the grid (SPEC §3.1), which is
-    /// every report written before the samplers.
-    #[serde(default, skip_serializing_if = "Sampler::is_grid")]
-    pub sampler: Sampler,
-}
-
-/// The hemicube.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct CubemapParameters {
-    /// Per-quadrant resolution R.
-    pub cube_res: u32,
-    /// How the GPU fills the texels looked up (`--gpu-fill`; the CPU backend casts rays
-    /// whatever it says). Written only where it is `rays`, so that a raster cube map's
-    /// report, and its experiment cache key, are what they were before the choice existed;
-    /// a report without it reads as `raster`.
-    #[serde(default, skip_serializing_if = "GpuFill::is_raster")]
-    pub gpu_fill: GpuFill,
-}
-
-/// The photon map and its gather.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct PhotonParameters {
-    /// Photons stored P.
-    pub photons: usize,
-    /// Nearest photons gathered per pixel K.
-    pub gather: usize,
-    /// Where paths start.
-    pub source: SourceKind,
-    /// A path ends at this many surface interactions.
-    pub max_bounces: u32,
-    /// Probability that a path ends at each interaction.
-    pub absorption: f32,
-    /// Gather radius; `null` for no limit.
-    pub max_radius: Option<f32>,
-    /// Gathered photons count where `n_j · n` is at least this.
-    pub normal_filter_cos: f32,
+    /// The parameters as the struct `T` (the method's own), where they are its fields.
+    pub fn typed<T: serde::de::DeserializeOwned>(&self) -> Option<T> {
+        serde_json::from_value(Value::Object(self.0.clone().into_iter().collect())).ok()
+    }
 }
 
 /// Where photon paths start.
@@ -578,4 +530,49 @@ pub struct PhotonDetails {
     pub holes: u64,
     /// Pixel gathers per second.
     pub gather_queries_per_s: f64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A report written before the parameters were an object (`hall`'s committed Fig. 11 cube
+    /// map, and a photon report made from it with K under its old name `gather`) is read with
+    /// its parameters by today's names, the derived values left out.
+    #[test]
+    fn a_report_with_the_parameters_at_the_top_level_is_read_with_them_as_an_object() {
+        let dir = std::env::temp_dir().join(format!("hmdist-flat-report-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let committed = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/docs/paper-scale/hall/fig11_cubemap.json"
+        );
+        let cubemap = RenderReport::read(std::path::Path::new(committed)).unwrap();
+        let expected = serde_json::json!({
+            "rays": 65536, "weighting": "cosine", "cube_res": 64, "gpu_fill": "raster"
+        });
+        assert_eq!(serde_json::to_value(&cubemap.parameters).unwrap(), expected);
+        assert_eq!(cubemap.rays, Some(65536));
+
+        let mut photon: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(committed).unwrap()).unwrap();
+        let object = photon.as_object_mut().unwrap();
+        for key in ["weighting", "strata", "rounds", "cube_res"] {
+            object.remove(key);
+        }
+        let flat = serde_json::json!({
+            "method": "photon2", "rays": null, "photons": 1000, "gather": 20, "source": "light",
+            "max_bounces": 1, "absorption": 0.2, "max_radius": null, "normal_filter_cos": 0.9
+        });
+        object.extend(flat.as_object().unwrap().clone());
+        let path = dir.join("photon.json");
+        std::fs::write(&path, photon.to_string()).unwrap();
+        let photon = RenderReport::read(&path).unwrap();
+        let expected = serde_json::json!({
+            "photons": 1000, "nearest": 20, "source": "light", "max_bounces": 1,
+            "absorption": 0.2f32, "max_radius": null
+        });
+        assert_eq!(serde_json::to_value(&photon.parameters).unwrap(), expected);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }
