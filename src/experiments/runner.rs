@@ -24,7 +24,7 @@ use super::section::Section;
 pub struct Runner<'a> {
     /// The scene.
     pub scene: Scene,
-    /// Identifies the scene in the cache's older keys ([`Runner::legacy_stem`]): hmdist's
+    /// Identifies the scene in the cache's older keys ([`Runner::legacy_stems`]): hmdist's
     /// version, the scene's name and the fingerprint of its content.
     pub(super) scene_key: String,
     /// The fingerprint of the scene's content ([`Scene::fingerprint`]), for the cache keys.
