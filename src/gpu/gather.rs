@@ -10,6 +10,7 @@ use std::time::Instant;
 
 use bytemuck::{Pod, Zeroable};
 
+use super::device::Device;
 use super::scene::{leaving_bits, shader_t_max, GpuScene};
 use crate::accel::GatherStart;
 use crate::backend::DispatchSplit;
@@ -115,7 +116,9 @@ pub(crate) struct GpuPoint<'a> {
 }
 
 /// Gathers at `starts`, point `i`'s random numbers keyed by `key(i)`; `point` makes each
-/// point's result from its sums.
+/// point's result from its sums. The points go in batches that fit the device
+/// ([`batch_points`]); each batch is uploaded, traced in dispatches of about half a second
+/// ([`trace_batch`]), read back and checked.
 pub(crate) fn gather_points<T>(
     scene: &GpuScene,
     job: &GatherJob,
@@ -124,47 +127,9 @@ pub(crate) fn gather_points<T>(
     progress: &dyn Progress,
     point: impl Fn(GpuPoint) -> T,
 ) -> Result<GpuGather<T>> {
-    let rays = job.rays;
-    let rounds = job.rounds;
-    let per_round = rays / rounds;
-    let (grid_a, grid_b) = strata(per_round);
-    let base = Params {
-        count: 0,
-        first_ray: 0,
-        end_ray: 0,
-        per_round,
-        rounds,
-        grid_a,
-        grid_b,
-        weighting: (job.weighting == Weighting::Uniform) as u32,
-        seed: [job.seed as u32, (job.seed >> 32) as u32],
-        d_min: job.d_min,
-        t_max: shader_t_max(job.t_max),
-        has_max: job.t_max.is_finite() as u32,
-        has_ao: job.ao_radius.is_some() as u32,
-        ao_radius: job.ao_radius.unwrap_or(0.0),
-        cube_res: job.cube_res,
-    };
-    let batch_points = job.split.map_or(MAX_POINTS, |s| s.points.clamp(1, MAX_POINTS)) as usize;
-    // The shader indexes sums by `i·rounds + round` in u32, and each buffer must fit the
-    // device: fewer points per batch where there are many rounds.
-    let batch_points = batch_points.min(u32::MAX as usize / rounds as usize).max(1);
-    let device = &scene.device;
-    let largest = device
-        .limits
-        .max_storage_buffer_binding_size
-        .min(device.limits.max_buffer_size);
-    let per_point = (rounds as u64 * 8).max(std::mem::size_of::<[[f32; 4]; 4]>() as u64);
-    let batch_points = batch_points.min((largest / per_point).max(1) as usize);
-    super::device::check_buffers(
-        device,
-        "the GPU gather",
-        &[
-            ("starts", batch_points * std::mem::size_of::<[[f32; 4]; 4]>()),
-            ("states", batch_points * std::mem::size_of::<State>()),
-            ("sums", batch_points * rounds as usize * 8),
-        ],
-    )?;
+    let (rays, rounds) = (job.rays, job.rounds);
+    let base = base_params(job);
+    let batch_points = batch_points(&scene.device, job)?;
     let mut out = GpuGather {
         points: Vec::with_capacity(starts.len()),
         upload_seconds: 0.0,
@@ -174,86 +139,8 @@ pub(crate) fn gather_points<T>(
     progress.start("gather (gpu)", starts.len() as u64 * rays as u64);
     for (b, batch) in starts.chunks(batch_points).enumerate() {
         let first_point = b * batch_points;
-        let clock = Instant::now();
-        let packed: Vec<[[f32; 4]; 4]> = batch
-            .iter()
-            .enumerate()
-            .map(|(i, s)| {
-                let k = key(first_point + i);
-                let (o, f) = (s.origin, s.frame);
-                [
-                    [o.x, o.y, o.z, leaving_bits(s.leaving)],
-                    [f.t.x, f.t.y, f.t.z, f32::from_bits(k as u32)],
-                    [f.b.x, f.b.y, f.b.z, f32::from_bits((k >> 32) as u32)],
-                    [f.n.x, f.n.y, f.n.z, 0.0],
-                ]
-            })
-            .collect();
-        let initial = State {
-            escaped: 0,
-            dmin: f32::INFINITY,
-            ao_open: [0.0; 2],
-            ao_total: [0.0; 2],
-            rays: 0,
-            padding: 0,
-        };
-        let (states, sums) = device.checked("the GPU gather", || {
-            let copy = wgpu::BufferUsages::COPY_SRC;
-            let params = device.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("gather params"),
-                size: std::mem::size_of::<Params>() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let start_buffer = device.storage(
-                "starts",
-                bytemuck::cast_slice(&packed),
-                wgpu::BufferUsages::empty(),
-            );
-            let states = device.storage("states", bytemuck::cast_slice(&vec![initial; batch.len()]), copy);
-            let sums = device.storage("sums", &vec![0u8; batch.len() * rounds as usize * 8], copy);
-            let groups = scene.bind_groups(&scene.gather, &[&params, &start_buffer, &states, &sums]);
-            device.wait();
-            out.upload_seconds += clock.elapsed().as_secs_f64();
-
-            let clock = Instant::now();
-            let mut first_ray = 0u32;
-            let capped = device.software && !job.split.is_some_and(|s| s.past_software_cap);
-            let most = if capped { SOFTWARE_MAX_RAYS } else { rays };
-            let mut step = match job.split {
-                Some(split) => split.rays.clamp(1, most),
-                None => (FIRST_DISPATCH_RAYS / batch.len() as u64).clamp(1, most as u64) as u32,
-            };
-            while first_ray < rays {
-                // Between dispatches of about half a second: Ctrl-C stops within one.
-                crate::interrupt::check()?;
-                let end_ray = first_ray.saturating_add(step).min(rays);
-                let dispatch = Params {
-                    count: batch.len() as u32,
-                    first_ray,
-                    end_ray,
-                    ..base
-                };
-                device
-                    .queue
-                    .write_buffer(&params, 0, bytemuck::bytes_of(&dispatch));
-                let took = Instant::now();
-                scene.dispatch(&scene.gather, &groups, batch.len() as u32);
-                let seconds = took.elapsed().as_secs_f64();
-                progress.advance(batch.len() as u64 * (end_ray - first_ray) as u64);
-                if job.split.is_none() {
-                    // Aim the next dispatch at DISPATCH_SECONDS, growing at most 16-fold.
-                    let scale = (DISPATCH_SECONDS / seconds.max(1e-4)).clamp(0.25, 16.0);
-                    step = ((step as f64 * scale) as u32).clamp(1, most);
-                }
-                first_ray = end_ray;
-            }
-            out.trace_seconds += clock.elapsed().as_secs_f64();
-            let clock = Instant::now();
-            let read = (device.read_back(&states)?, device.read_back(&sums)?);
-            out.readback_seconds += clock.elapsed().as_secs_f64();
-            Ok(read)
-        })?;
+        let packed = pack_starts(batch, |i| key(first_point + i));
+        let (states, sums) = trace_batch(scene, job, &base, &packed, progress, &mut out)?;
         let states: Vec<State> = bytemuck::pod_collect_to_vec(&states);
         let sums: Vec<[f32; 2]> = bytemuck::pod_collect_to_vec(&sums);
         // The shader's own count: a loop the driver cut short (lavapipe stops a shader loop
@@ -270,13 +157,9 @@ pub(crate) fn gather_points<T>(
         // A Kahan sum is its value less its carry.
         let compensated = |[value, carry]: [f32; 2]| value as f64 - carry as f64;
         let mut round_sums = Vec::with_capacity(rounds as usize);
-        for (i, state) in states.iter().enumerate() {
+        for (state, sums) in states.iter().zip(sums.chunks(rounds as usize)) {
             round_sums.clear();
-            round_sums.extend(
-                sums[i * rounds as usize..(i + 1) * rounds as usize]
-                    .iter()
-                    .map(|&s| compensated(s)),
-            );
+            round_sums.extend(sums.iter().map(|&s| compensated(s)));
             out.points.push(point(GpuPoint {
                 round_sums: &round_sums,
                 escaped: state.escaped,
@@ -287,6 +170,155 @@ pub(crate) fn gather_points<T>(
     }
     progress.finish();
     Ok(out)
+}
+
+/// The shader's parameters for `job`, the batch's count and ray range left at 0.
+fn base_params(job: &GatherJob) -> Params {
+    let per_round = job.rays / job.rounds;
+    let (grid_a, grid_b) = strata(per_round);
+    Params {
+        count: 0,
+        first_ray: 0,
+        end_ray: 0,
+        per_round,
+        rounds: job.rounds,
+        grid_a,
+        grid_b,
+        weighting: (job.weighting == Weighting::Uniform) as u32,
+        seed: [job.seed as u32, (job.seed >> 32) as u32],
+        d_min: job.d_min,
+        t_max: shader_t_max(job.t_max),
+        has_max: job.t_max.is_finite() as u32,
+        has_ao: job.ao_radius.is_some() as u32,
+        ao_radius: job.ao_radius.unwrap_or(0.0),
+        cube_res: job.cube_res,
+    }
+}
+
+/// Points per batch: the split's, or [`MAX_POINTS`], fewer where the sums' `u32` index or the
+/// device's largest buffer would not hold them; an error where even these buffers do not fit
+/// the device's memory.
+fn batch_points(device: &Device, job: &GatherJob) -> Result<usize> {
+    let rounds = job.rounds;
+    let batch_points = job.split.map_or(MAX_POINTS, |s| s.points.clamp(1, MAX_POINTS)) as usize;
+    // The shader indexes sums by `i·rounds + round` in u32, and each buffer must fit the
+    // device: fewer points per batch where there are many rounds.
+    let batch_points = batch_points.min(u32::MAX as usize / rounds as usize).max(1);
+    let largest = device
+        .limits
+        .max_storage_buffer_binding_size
+        .min(device.limits.max_buffer_size);
+    let per_point = (rounds as u64 * 8).max(std::mem::size_of::<[[f32; 4]; 4]>() as u64);
+    let batch_points = batch_points.min((largest / per_point).max(1) as usize);
+    super::device::check_buffers(
+        device,
+        "the GPU gather",
+        &[
+            ("starts", batch_points * std::mem::size_of::<[[f32; 4]; 4]>()),
+            ("states", batch_points * std::mem::size_of::<State>()),
+            ("sums", batch_points * rounds as usize * 8),
+        ],
+    )?;
+    Ok(batch_points)
+}
+
+/// The points as the shader reads them: origin and leaving side, the frame, and the key's two
+/// halves in the spare lanes.
+fn pack_starts(batch: &[GatherStart], key: impl Fn(usize) -> u64) -> Vec<[[f32; 4]; 4]> {
+    batch
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let k = key(i);
+            let (o, f) = (s.origin, s.frame);
+            [
+                [o.x, o.y, o.z, leaving_bits(s.leaving)],
+                [f.t.x, f.t.y, f.t.z, f32::from_bits(k as u32)],
+                [f.b.x, f.b.y, f.b.z, f32::from_bits((k >> 32) as u32)],
+                [f.n.x, f.n.y, f.n.z, 0.0],
+            ]
+        })
+        .collect()
+}
+
+/// One batch of `packed` points: uploaded, its rays cast in dispatches aimed at
+/// [`DISPATCH_SECONDS`] each (or the split's), and its states and sums read back, the
+/// seconds of each step added to `out`.
+fn trace_batch<T>(
+    scene: &GpuScene,
+    job: &GatherJob,
+    base: &Params,
+    packed: &[[[f32; 4]; 4]],
+    progress: &dyn Progress,
+    out: &mut GpuGather<T>,
+) -> Result<(Vec<u8>, Vec<u8>)> {
+    let (device, count, rays) = (&scene.device, packed.len(), job.rays);
+    let clock = Instant::now();
+    let initial = State {
+        escaped: 0,
+        dmin: f32::INFINITY,
+        ao_open: [0.0; 2],
+        ao_total: [0.0; 2],
+        rays: 0,
+        padding: 0,
+    };
+    device.checked("the GPU gather", || {
+        let copy = wgpu::BufferUsages::COPY_SRC;
+        let params = device.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("gather params"),
+            size: std::mem::size_of::<Params>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let start_buffer = device.storage(
+            "starts",
+            bytemuck::cast_slice(packed),
+            wgpu::BufferUsages::empty(),
+        );
+        let states = device.storage("states", bytemuck::cast_slice(&vec![initial; count]), copy);
+        let sums = device.storage("sums", &vec![0u8; count * job.rounds as usize * 8], copy);
+        let groups = scene.bind_groups(&scene.gather, &[&params, &start_buffer, &states, &sums]);
+        device.wait();
+        out.upload_seconds += clock.elapsed().as_secs_f64();
+
+        let clock = Instant::now();
+        let mut first_ray = 0u32;
+        let capped = device.software && !job.split.is_some_and(|s| s.past_software_cap);
+        let most = if capped { SOFTWARE_MAX_RAYS } else { rays };
+        let mut step = match job.split {
+            Some(split) => split.rays.clamp(1, most),
+            None => (FIRST_DISPATCH_RAYS / count as u64).clamp(1, most as u64) as u32,
+        };
+        while first_ray < rays {
+            // Between dispatches of about half a second: Ctrl-C stops within one.
+            crate::interrupt::check()?;
+            let end_ray = first_ray.saturating_add(step).min(rays);
+            let dispatch = Params {
+                count: count as u32,
+                first_ray,
+                end_ray,
+                ..*base
+            };
+            device
+                .queue
+                .write_buffer(&params, 0, bytemuck::bytes_of(&dispatch));
+            let took = Instant::now();
+            scene.dispatch(&scene.gather, &groups, count as u32);
+            let seconds = took.elapsed().as_secs_f64();
+            progress.advance(count as u64 * (end_ray - first_ray) as u64);
+            if job.split.is_none() {
+                // Aim the next dispatch at DISPATCH_SECONDS, growing at most 16-fold.
+                let scale = (DISPATCH_SECONDS / seconds.max(1e-4)).clamp(0.25, 16.0);
+                step = ((step as f64 * scale) as u32).clamp(1, most);
+            }
+            first_ray = end_ray;
+        }
+        out.trace_seconds += clock.elapsed().as_secs_f64();
+        let clock = Instant::now();
+        let read = (device.read_back(&states)?, device.read_back(&sums)?);
+        out.readback_seconds += clock.elapsed().as_secs_f64();
+        Ok(read)
+    })
 }
 
 #[cfg(test)]
