@@ -290,6 +290,108 @@ struct Pipeline {
     depth: wgpu::Texture,
 }
 
+/// The bind group layouts of the rasterising pass (the uniform and the cubes' views) and of
+/// the lookup (the uniform, the directions, the depth atlas and the sums).
+fn bind_group_layouts(device: &wgpu::Device) -> (wgpu::BindGroupLayout, wgpu::BindGroupLayout) {
+    let entry = |binding, visibility, ty| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty,
+        count: None,
+    };
+    let uniform = wgpu::BindingType::Buffer {
+        ty: wgpu::BufferBindingType::Uniform,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    };
+    let storage = |read_only| wgpu::BindingType::Buffer {
+        ty: wgpu::BufferBindingType::Storage { read_only },
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    };
+    let render_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("rasterise"),
+        entries: &[
+            entry(0, wgpu::ShaderStages::VERTEX, uniform),
+            entry(1, wgpu::ShaderStages::VERTEX, storage(true)),
+        ],
+    });
+    let compute_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("lookup"),
+        entries: &[
+            entry(0, wgpu::ShaderStages::COMPUTE, uniform),
+            entry(1, wgpu::ShaderStages::COMPUTE, storage(true)),
+            entry(
+                2,
+                wgpu::ShaderStages::COMPUTE,
+                wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+            ),
+            entry(3, wgpu::ShaderStages::COMPUTE, storage(false)),
+        ],
+    });
+    (render_layout, compute_layout)
+}
+
+/// A pipeline layout of the one bind group `layout`.
+fn pipeline_layout(device: &wgpu::Device, layout: &wgpu::BindGroupLayout) -> wgpu::PipelineLayout {
+    device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: None,
+        bind_group_layouts: &[Some(layout)],
+        immediate_size: 0,
+    })
+}
+
+/// The rasterising pipeline: every triangle into each hemicube face's viewport, the nearest
+/// depth kept, its distance stored.
+fn render_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::BindGroupLayout,
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("rasterise hemicubes"),
+        layout: Some(&pipeline_layout(device, layout)),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some("rasterise"),
+            compilation_options: Default::default(),
+            buffers: &[Some(wgpu::VertexBufferLayout {
+                array_stride: 12,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![0 => Float32x3],
+            })],
+        },
+        primitive: wgpu::PrimitiveState {
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: wgpu::TextureFormat::Depth32Float,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some("store_depth"),
+            compilation_options: Default::default(),
+            targets: &[Some(wgpu::ColorTargetState {
+                format: wgpu::TextureFormat::R32Float,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
 impl Pipeline {
     fn new(gpu: &HemicubeGpu, mesh: &Mesh, atlas_size: (u32, u32)) -> Pipeline {
         let device = &gpu.device;
@@ -313,94 +415,11 @@ impl Pipeline {
             contents: bytemuck::cast_slice(&indices),
             usage: wgpu::BufferUsages::INDEX,
         });
-        let entry = |binding, visibility, ty| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility,
-            ty,
-            count: None,
-        };
-        let uniform = wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        };
-        let storage = |read_only| wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        };
-        let render_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("rasterise"),
-            entries: &[
-                entry(0, wgpu::ShaderStages::VERTEX, uniform),
-                entry(1, wgpu::ShaderStages::VERTEX, storage(true)),
-            ],
-        });
-        let compute_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("lookup"),
-            entries: &[
-                entry(0, wgpu::ShaderStages::COMPUTE, uniform),
-                entry(1, wgpu::ShaderStages::COMPUTE, storage(true)),
-                entry(
-                    2,
-                    wgpu::ShaderStages::COMPUTE,
-                    wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                ),
-                entry(3, wgpu::ShaderStages::COMPUTE, storage(false)),
-            ],
-        });
-        let layout = |bgl: &wgpu::BindGroupLayout| {
-            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: None,
-                bind_group_layouts: &[Some(bgl)],
-                immediate_size: 0,
-            })
-        };
-        let render = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("rasterise hemicubes"),
-            layout: Some(&layout(&render_layout)),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("rasterise"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: 12,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &wgpu::vertex_attr_array![0 => Float32x3],
-                })],
-            },
-            primitive: wgpu::PrimitiveState {
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: wgpu::TextureFormat::Depth32Float,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("store_depth"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: wgpu::TextureFormat::R32Float,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let (render_layout, compute_layout) = bind_group_layouts(device);
+        let render = render_pipeline(device, &module, &render_layout);
         let compute = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("look hemicubes up"),
-            layout: Some(&layout(&compute_layout)),
+            layout: Some(&pipeline_layout(device, &compute_layout)),
             module: &module,
             entry_point: Some("lookup"),
             compilation_options: Default::default(),
@@ -441,10 +460,9 @@ impl Pipeline {
         }
     }
 
-    /// Rasterises and looks up one batch; the result per hemicube and the seconds of each
-    /// half.
     /// Rasterises `cubes`' hemicubes, then looks their directions up in dispatches of at most
-    /// `per_dispatch` directions each (the sums carried between them).
+    /// `per_dispatch` directions each (the sums carried between them): the result per
+    /// hemicube and the seconds of each half.
     fn run(&self, gpu: &HemicubeGpu, params: &Params, cubes: &[Cube], per_dispatch: u32) -> Result<Batch> {
         let device = &gpu.device;
         let init = |label, contents: &[u8], usage| {
@@ -467,16 +485,32 @@ impl Pipeline {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        let readback = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("hmd readback"),
-            size: out_size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
         let atlas_view = self.atlas.create_view(&Default::default());
-        let depth_view = self.depth.create_view(&Default::default());
 
+        let raster_seconds = self.rasterise(gpu, &params_buffer, &cube_buffer, &atlas_view, cubes.len());
         let start = Instant::now();
+        let buffers = [&params_buffer, &cube_buffer, &output];
+        self.look_up(gpu, params, buffers, &atlas_view, cubes.len(), per_dispatch);
+        let values = read_back(gpu, &output)?;
+        Ok(Batch {
+            values,
+            raster_seconds,
+            lookup_seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// Rasterises `count` hemicubes into the atlas; the seconds it took.
+    fn rasterise(
+        &self,
+        gpu: &HemicubeGpu,
+        params_buffer: &wgpu::Buffer,
+        cube_buffer: &wgpu::Buffer,
+        atlas_view: &wgpu::TextureView,
+        count: usize,
+    ) -> f64 {
+        let device = &gpu.device;
+        let start = Instant::now();
+        let depth_view = self.depth.create_view(&Default::default());
         let render_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: None,
             layout: &self.render_layout,
@@ -496,7 +530,7 @@ impl Pipeline {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("hemicubes"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &atlas_view,
+                    view: atlas_view,
                     depth_slice: None,
                     resolve_target: None,
                     // -1: no surface through this texel (the direction escapes).
@@ -526,13 +560,26 @@ impl Pipeline {
             pass.set_bind_group(0, &render_group, &[]);
             pass.set_vertex_buffer(0, self.vertices.slice(..));
             pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..self.index_count, 0, 0..(cubes.len() as u32 * 5));
+            pass.draw_indexed(0..self.index_count, 0, 0..(count as u32 * 5));
         }
         gpu.queue.submit([encoder.finish()]);
         let _ = device.poll(wgpu::PollType::wait_indefinitely());
-        let raster = start.elapsed().as_secs_f64();
+        start.elapsed().as_secs_f64()
+    }
 
-        let start = Instant::now();
+    /// Looks the directions of `count` hemicubes up in the atlas, in dispatches of at most
+    /// `per_dispatch` directions, into `output`; `buffers`: the parameters, the cubes, the
+    /// output.
+    fn look_up(
+        &self,
+        gpu: &HemicubeGpu,
+        params: &Params,
+        [params_buffer, cube_buffer, output]: [&wgpu::Buffer; 3],
+        atlas_view: &wgpu::TextureView,
+        count: usize,
+        per_dispatch: u32,
+    ) {
+        let device = &gpu.device;
         let compute_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: None,
             layout: &self.compute_layout,
@@ -547,7 +594,7 @@ impl Pipeline {
                 },
                 wgpu::BindGroupEntry {
                     binding: 2,
-                    resource: wgpu::BindingResource::TextureView(&atlas_view),
+                    resource: wgpu::BindingResource::TextureView(atlas_view),
                 },
                 wgpu::BindGroupEntry {
                     binding: 3,
@@ -564,37 +611,45 @@ impl Pipeline {
                 ..*params
             };
             gpu.queue
-                .write_buffer(&params_buffer, 0, bytemuck::bytes_of(&dispatch));
+                .write_buffer(params_buffer, 0, bytemuck::bytes_of(&dispatch));
             let mut encoder = device.create_command_encoder(&Default::default());
             {
                 let mut pass = encoder.begin_compute_pass(&Default::default());
                 pass.set_pipeline(&self.compute);
                 pass.set_bind_group(0, &compute_group, &[]);
-                pass.dispatch_workgroups((cubes.len() as u32).div_ceil(64), 1, 1);
+                pass.dispatch_workgroups((count as u32).div_ceil(64), 1, 1);
             }
             gpu.queue.submit([encoder.finish()]);
             first_ray = end_ray;
         }
-        let mut encoder = device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(&output, 0, &readback, 0, out_size);
-        gpu.queue.submit([encoder.finish()]);
-        let slice = readback.slice(..);
-        slice.map_async(wgpu::MapMode::Read, |_| {});
-        let _ = device.poll(wgpu::PollType::wait_indefinitely());
-        let values: Vec<LookupResult> = match slice.get_mapped_range() {
-            Ok(view) => bytemuck::cast_slice(&view).to_vec(),
-            Err(e) => {
-                let message = format!("cannot read the results back: {e}");
-                return Err(Error::device(DeviceErrorKind::Readback, message));
-            }
-        };
-        readback.unmap();
-        Ok(Batch {
-            values,
-            raster_seconds: raster,
-            lookup_seconds: start.elapsed().as_secs_f64(),
-        })
     }
+}
+
+/// `output` read back from the GPU.
+fn read_back(gpu: &HemicubeGpu, output: &wgpu::Buffer) -> Result<Vec<LookupResult>> {
+    let device = &gpu.device;
+    let out_size = output.size();
+    let readback = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("hmd readback"),
+        size: out_size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(output, 0, &readback, 0, out_size);
+    gpu.queue.submit([encoder.finish()]);
+    let slice = readback.slice(..);
+    slice.map_async(wgpu::MapMode::Read, |_| {});
+    let _ = device.poll(wgpu::PollType::wait_indefinitely());
+    let values: Vec<LookupResult> = match slice.get_mapped_range() {
+        Ok(view) => bytemuck::cast_slice(&view).to_vec(),
+        Err(e) => {
+            let message = format!("cannot read the results back: {e}");
+            return Err(Error::device(DeviceErrorKind::Readback, message));
+        }
+    };
+    readback.unmap();
+    Ok(values)
 }
 
 #[cfg(test)]
