@@ -327,6 +327,39 @@ pub fn cost(runner: &Runner) -> Result<Section> {
         .collect();
     let paper_front: Vec<usize> = pareto_front(&paper_xy).into_iter().map(|j| at_paper[j]).collect();
 
+    let (table, front_table) = cost_tables(&points, &front, &paper_front, scene, size);
+    let mut files = table.write(&runner.out, "cost")?;
+    files.push(plot_measured(runner, &points, &front)?);
+    notes.push(format!(
+        "Which estimator for which accuracy at which cost (cost.svg; seconds as the runs measured them, a photon image's with its map's build from Table 4): {}. Every other image is beaten by a front image that is as fast and more accurate.",
+        front_in_words(&points, &front, |p| p.seconds)
+    ));
+    if !paper_front.is_empty() {
+        let (plot, note) = plot_at_paper(runner, &points, &paper_front)?;
+        files.push(plot);
+        notes.push(note);
+    }
+    notes.push(
+        "Not plotted: Fig. 10, Fig. 16/17 and the adaptive study, whose tables give no seconds per image."
+            .into(),
+    );
+    Ok(Section {
+        name: "cost".into(),
+        tables: vec![front_table],
+        files,
+        notes,
+        findings: vec![],
+    })
+}
+
+/// The table of every image (`cost.csv`) and the table of the front.
+fn cost_tables(
+    points: &[CostPoint],
+    front: &[usize],
+    paper_front: &[usize],
+    scene: &str,
+    size: u32,
+) -> (Table, Table) {
     let mut table = Table::new(
         &format!("Accuracy against cost, {size}², `{scene}`: every image of Tables 1–3"),
         &[
@@ -354,7 +387,7 @@ pub fn cost(runner: &Runner) -> Result<Section> {
         &format!("The Pareto front, {size}², `{scene}`: the most accurate image for its seconds"),
         &["estimator", "setting", "f_diff", "seconds"],
     );
-    for &i in &front {
+    for &i in front {
         let p = &points[i];
         front_table.push(vec![
             p.estimator.into(),
@@ -363,24 +396,31 @@ pub fn cost(runner: &Runner) -> Result<Section> {
             format!("{:.2}", p.seconds),
         ]);
     }
-    let mut files = table.write(&runner.out, "cost")?;
+    (table, front_table)
+}
 
-    let drawn = |seconds: &dyn Fn(&CostPoint) -> Option<f64>| -> Vec<(Series, Marks)> {
-        ESTIMATORS
-            .iter()
-            .enumerate()
-            .map(|(place, e)| {
-                let marks = if e.starts_with("photon") {
-                    Marks::POINTS
-                } else {
-                    Marks::LINE
-                };
-                (series_of(&points, e, seconds), marks.coloured(place))
-            })
-            .filter(|(s, _)| !s.points.is_empty())
-            .collect()
-    };
-    let measured = drawn(&|p| Some(p.seconds));
+/// `points`' series, one per estimator with any point, at `seconds`, each drawn as its
+/// estimator is (the photon methods as points, the sweeps as lines).
+fn drawn(points: &[CostPoint], seconds: &dyn Fn(&CostPoint) -> Option<f64>) -> Vec<(Series, Marks)> {
+    ESTIMATORS
+        .iter()
+        .enumerate()
+        .map(|(place, e)| {
+            let marks = if e.starts_with("photon") {
+                Marks::POINTS
+            } else {
+                Marks::LINE
+            };
+            (series_of(points, e, seconds), marks.coloured(place))
+        })
+        .filter(|(s, _)| !s.points.is_empty())
+        .collect()
+}
+
+/// `cost.svg`: f_diff against the seconds as measured, the front labelled.
+fn plot_measured(runner: &Runner, points: &[CostPoint], front: &[usize]) -> Result<std::path::PathBuf> {
+    let (scene, size) = (&runner.scene.name, runner.params.size);
+    let measured = drawn(points, &|p| Some(p.seconds));
     let plot = runner.out.join("cost.svg");
     log_log_with(
         &plot,
@@ -388,55 +428,48 @@ pub fn cost(runner: &Runner) -> Result<Section> {
         "seconds (as measured)",
         "f_diff",
         &measured.iter().map(|(s, m)| (s, *m)).collect::<Vec<_>>(),
-        &front_labels(&points, &front, &|p| p.seconds),
+        &front_labels(points, front, &|p| p.seconds),
     )?;
-    files.push(plot);
-    notes.push(format!(
-        "Which estimator for which accuracy at which cost (cost.svg; seconds as the runs measured them, a photon image's with its map's build from Table 4): {}. Every other image is beaten by a front image that is as fast and more accurate.",
-        front_in_words(&points, &front, |p| p.seconds)
-    ));
-    if !paper_front.is_empty() {
-        let mut at_paper_seconds = drawn(&|p| p.paper_seconds);
-        let analogue = paper::analogue(scene);
-        // The paper's gather in gather's colour, its GPU cube map in the cube map's.
-        for (place, s) in analogue
-            .map(paper_series)
-            .unwrap_or_default()
-            .into_iter()
-            .enumerate()
-        {
-            at_paper_seconds.push((s, Marks::HOLLOW.coloured(place)));
-        }
-        let plot = runner.out.join("cost_paper.svg");
-        log_log_with(
-            &plot,
-            &format!("our f_diff at the paper's seconds, {size}², `{scene}`"),
-            "seconds (the paper's, Tables 2–4)",
-            "f_diff",
-            &at_paper_seconds.iter().map(|(s, m)| (s, *m)).collect::<Vec<_>>(),
-            &front_labels(&points, &paper_front, &|p| p.paper_seconds.unwrap_or(0.0)),
-        )?;
-        files.push(plot);
-        notes.push(format!(
-            "At the paper's seconds for the same settings (cost_paper.svg: its Table 2 for gather on the CPU and the cube map on the GPU, Table 3 and Table 4 for the photon methods), the front is: {}.{}",
-            front_in_words(&points, &paper_front, |p| p.paper_seconds.unwrap_or(0.0)),
-            match analogue {
-                Some(_) => " Hollow points: the paper's own f_diff (Table 1 as read) at its seconds.",
-                None => "",
-            }
-        ));
+    Ok(plot)
+}
+
+/// `cost_paper.svg`: our f_diff at the paper's seconds for the same settings, with the
+/// paper's own points; and the note that reads it.
+fn plot_at_paper(
+    runner: &Runner,
+    points: &[CostPoint],
+    paper_front: &[usize],
+) -> Result<(std::path::PathBuf, String)> {
+    let (scene, size) = (&runner.scene.name, runner.params.size);
+    let mut at_paper_seconds = drawn(points, &|p| p.paper_seconds);
+    let analogue = paper::analogue(scene);
+    // The paper's gather in gather's colour, its GPU cube map in the cube map's.
+    for (place, s) in analogue
+        .map(paper_series)
+        .unwrap_or_default()
+        .into_iter()
+        .enumerate()
+    {
+        at_paper_seconds.push((s, Marks::HOLLOW.coloured(place)));
     }
-    notes.push(
-        "Not plotted: Fig. 10, Fig. 16/17 and the adaptive study, whose tables give no seconds per image."
-            .into(),
+    let plot = runner.out.join("cost_paper.svg");
+    log_log_with(
+        &plot,
+        &format!("our f_diff at the paper's seconds, {size}², `{scene}`"),
+        "seconds (the paper's, Tables 2–4)",
+        "f_diff",
+        &at_paper_seconds.iter().map(|(s, m)| (s, *m)).collect::<Vec<_>>(),
+        &front_labels(points, paper_front, &|p| p.paper_seconds.unwrap_or(0.0)),
+    )?;
+    let note = format!(
+        "At the paper's seconds for the same settings (cost_paper.svg: its Table 2 for gather on the CPU and the cube map on the GPU, Table 3 and Table 4 for the photon methods), the front is: {}.{}",
+        front_in_words(points, paper_front, |p| p.paper_seconds.unwrap_or(0.0)),
+        match analogue {
+            Some(_) => " Hollow points: the paper's own f_diff (Table 1 as read) at its seconds.",
+            None => "",
+        }
     );
-    Ok(Section {
-        name: "cost".into(),
-        tables: vec![front_table],
-        files,
-        notes,
-        findings: vec![],
-    })
+    Ok((plot, note))
 }
 
 #[cfg(test)]
