@@ -157,20 +157,7 @@ pub fn adaptive(runner: &Runner) -> Result<Section> {
     let p = &runner.params;
     let reference = reference(runner)?;
     let l_diag = runner.scene.diagonal();
-    let mut sweeps = vec![];
-    for sampler in [Sampler::Grid, Sampler::Sobol] {
-        let mut fixed = vec![];
-        for &rays in &p.rays {
-            let config = GatherParams {
-                rays,
-                sampler,
-                ..GatherParams::default()
-            };
-            let (image, report) = runner.method_image("gather", &config, 1)?;
-            fixed.push(point(&reference, &image, &report, l_diag)?);
-        }
-        sweeps.push((sampler, fixed));
-    }
+    let sweeps = fixed_sweeps(runner, &reference, l_diag)?;
     let mut table = Table::new(
         &format!(
             "Adaptive gathering ({}): f_diff against gather with {} rays, {}², `{}`; at most {} rays; the best fixed N of the grid and the sobol sampler",
@@ -235,6 +222,48 @@ pub fn adaptive(runner: &Runner) -> Result<Section> {
         series.push((scheme.name, points));
     }
     let mut files = table.write(&runner.out, "adaptive")?;
+    files.extend(plots(runner, &sweeps, &series)?);
+    files.push(rays_picture(runner)?);
+    notes.push(
+        "How many rays does a pixel need (the paper's question)? A relative tolerance stops each pixel at a relative error, which is what a record-spacing cache feels; f_diff averages absolute errors, dominated by open regions with large H, which an absolute tolerance (in units of l_diag, f_diff's unit) aims at. Grid rounds are independent small grids and lose part of one grid's stratification; sobol blocks are one progressive sequence, so a pixel that stops at N rays has the H of gather --sampler sobol --rays N. The rays per pixel are in adaptive_rays.png.".into(),
+    );
+    Ok(Section {
+        name: "adaptive".into(),
+        tables: vec![table],
+        files,
+        notes,
+        ..Section::default()
+    })
+}
+
+/// Fixed N over the preset's ray sweep, with the grid and with the sobol sampler.
+fn fixed_sweeps(runner: &Runner, reference: &HmdImage, l_diag: f32) -> Result<Vec<(Sampler, Vec<Point>)>> {
+    let p = &runner.params;
+    let mut sweeps = vec![];
+    for sampler in [Sampler::Grid, Sampler::Sobol] {
+        let mut fixed = vec![];
+        for &rays in &p.rays {
+            let config = GatherParams {
+                rays,
+                sampler,
+                ..GatherParams::default()
+            };
+            let (image, report) = runner.method_image("gather", &config, 1)?;
+            fixed.push(point(reference, &image, &report, l_diag)?);
+        }
+        sweeps.push((sampler, fixed));
+    }
+    Ok(sweeps)
+}
+
+/// `adaptive.svg` and `adaptive_p95.svg`: f_diff and p95 against the mean rays per pixel,
+/// fixed N against each adaptive scheme.
+fn plots(
+    runner: &Runner,
+    sweeps: &[(Sampler, Vec<Point>)],
+    series: &[(&str, Vec<Point>)],
+) -> Result<Vec<std::path::PathBuf>> {
+    let mut files = vec![];
     let plot = runner.out.join("adaptive.svg");
     let mut curves: Vec<(String, &[Point])> = sweeps
         .iter()
@@ -271,17 +300,7 @@ pub fn adaptive(runner: &Runner) -> Result<Section> {
         &plot_of(|p| p.p95),
     )?;
     files.push(plot);
-    files.push(rays_picture(runner)?);
-    notes.push(
-        "How many rays does a pixel need (the paper's question)? A relative tolerance stops each pixel at a relative error, which is what a record-spacing cache feels; f_diff averages absolute errors, dominated by open regions with large H, which an absolute tolerance (in units of l_diag, f_diff's unit) aims at. Grid rounds are independent small grids and lose part of one grid's stratification; sobol blocks are one progressive sequence, so a pixel that stops at N rays has the H of gather --sampler sobol --rays N. The rays per pixel are in adaptive_rays.png.".into(),
-    );
-    Ok(Section {
-        name: "adaptive".into(),
-        tables: vec![table],
-        files,
-        notes,
-        ..Section::default()
-    })
+    Ok(files)
 }
 
 /// Savings as `×a, ×b, …`.
