@@ -127,6 +127,25 @@ pub fn table3(runner: &Runner) -> Result<Section> {
         write_grid(&path, tiles, p.nearest.len())?;
         files.push(path);
     }
+    let (findings, note) = table3_findings(&table, sums, seconds, lower_rows);
+    Ok(Section {
+        name: "table3".into(),
+        tables: vec![table],
+        files,
+        notes: vec![note],
+        findings,
+    })
+}
+
+/// Table 3's findings (method II's error and its extra seconds against method I's, from
+/// `sums` of f_diff and of seconds over `table`'s rows, II lower in `lower_rows`), and the
+/// note of the paper's corner cells.
+fn table3_findings(
+    table: &Table,
+    sums: [f64; 2],
+    seconds: [f64; 2],
+    lower_rows: usize,
+) -> (Vec<String>, String) {
     let n = table.rows.len() as f64;
     let (fewest, most) = (
         paper::TABLE3[0].photons,
@@ -159,16 +178,11 @@ pub fn table3(runner: &Runner) -> Result<Section> {
             100.0 * (seconds2 / seconds1 - 1.0)
         ),
     ];
-    Ok(Section {
-        name: "table3".into(),
-        tables: vec![table],
-        files,
-        notes: vec![format!(
-            "The paper's Table 3 (1024², method I / II, scene A): {}.",
-            corners.join("; ")
-        )],
-        findings,
-    })
+    let note = format!(
+        "The paper's Table 3 (1024², method I / II, scene A): {}.",
+        corners.join("; ")
+    );
+    (findings, note)
 }
 
 /// Fig. 10: methods I and II side by side with very many photons and a very large gather.
@@ -310,6 +324,25 @@ pub fn fig16_17(runner: &Runner) -> Result<Section> {
         files.push(path);
     }
     files.extend(table.write(&runner.out, "fig16_17")?);
+    let notes = vec![format!(
+        "Pictures: fig16.png is light-sourced, fig17.png camera-sourced, both on `{}` (rows: {} then {} bounces, each by photons; columns: K). The paper's Fig. 16 and 17 are its scenes A and B, each with both sources.",
+        runner.scene.name,
+        paper::BOUNCES[0],
+        paper::BOUNCES[1]
+    )];
+    let findings = fig16_17_findings(runner, &by);
+    Ok(Section {
+        name: "fig16_17".into(),
+        tables: vec![table],
+        files,
+        notes,
+        findings,
+    })
+}
+
+/// Fig. 16/17's findings from the f_diffs `by` source and bounces: which source does better
+/// on this scene's paper analogue, and whether longer paths do.
+fn fig16_17_findings(runner: &Runner, by: &BTreeMap<(SourceKind, u32), Vec<f64>>) -> Vec<String> {
     let mean = |source: SourceKind, bounces: Option<u32>| {
         let v: Vec<f64> = by
             .iter()
@@ -328,12 +361,6 @@ pub fn fig16_17(runner: &Runner) -> Result<Section> {
             "no clear difference here (within 1 %)"
         }
     };
-    let notes = vec![format!(
-        "Pictures: fig16.png is light-sourced, fig17.png camera-sourced, both on `{}` (rows: {} then {} bounces, each by photons; columns: K). The paper's Fig. 16 and 17 are its scenes A and B, each with both sources.",
-        runner.scene.name,
-        paper::BOUNCES[0],
-        paper::BOUNCES[1]
-    )];
     let mut findings = vec![];
     if runner.scene.light.is_some() {
         let (light, camera) = (mean(SourceKind::Light, None), mean(SourceKind::Camera, None));
@@ -360,13 +387,7 @@ pub fn fig16_17(runner: &Runner) -> Result<Section> {
         verdict(long, short),
         source.name()
     ));
-    Ok(Section {
-        name: "fig16_17".into(),
-        tables: vec![table],
-        files,
-        notes,
-        findings,
-    })
+    findings
 }
 
 /// Table 4: photon map build seconds (trace and kd-tree) against photon count, light vs camera.
@@ -424,6 +445,20 @@ pub fn table4(runner: &Runner) -> Result<Section> {
             ]);
         }
     }
+    let published = table4_paper();
+    let mut files = ours.write(&runner.out, "table4")?;
+    files.extend(published.write(&runner.out, "table4_paper")?);
+    files.push(table4_plot(runner, &sources, &series)?);
+    Ok(Section {
+        name: "table4".into(),
+        tables: vec![ours, published],
+        files,
+        ..Section::default()
+    })
+}
+
+/// The paper's Table 4 as published.
+fn table4_paper() -> Table {
     let mut published = Table::new(
         &format!("Table 4 (paper, {LONG_PATHS} bounces, light / camera, seconds)"),
         &["photons", "light", "camera"],
@@ -435,8 +470,16 @@ pub fn table4(runner: &Runner) -> Result<Section> {
             format!("{}", row.camera_seconds),
         ]);
     }
-    let mut files = ours.write(&runner.out, "table4")?;
-    files.extend(published.write(&runner.out, "table4_paper")?);
+    published
+}
+
+/// `table4.svg`: the build seconds against photons, each source beside the paper's in its
+/// colour.
+fn table4_plot(
+    runner: &Runner,
+    sources: &[(&str, PhotonSource)],
+    series: &[Series],
+) -> Result<std::path::PathBuf> {
     let plot = runner.out.join("table4.svg");
     // The paper's build seconds, each source beside ours in its colour.
     let paper_series: Vec<Series> = sources
@@ -464,13 +507,7 @@ pub fn table4(runner: &Runner) -> Result<Section> {
         &series,
         &paper_series,
     )?;
-    files.push(plot);
-    Ok(Section {
-        name: "table4".into(),
-        tables: vec![ours, published],
-        files,
-        ..Section::default()
-    })
+    Ok(plot)
 }
 
 /// Table 4's plan: its photon map builds, estimated in proportion to one build timed per
