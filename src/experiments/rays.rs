@@ -222,38 +222,11 @@ pub fn table1(runner: &Runner) -> Result<Section> {
         ));
         previous = Some(fg);
     }
-    let mut published = Table::new(
-        "Table 1 (paper, in the text's order; the ray count of each value is uncertain)",
-        &["#", "CPU, scene A", "CPU, scene B", "GPU, scene A"],
-    );
-    for i in 0..paper::TABLE1_CPU_A.len() {
-        published.push(vec![
-            (i + 1).to_string(),
-            format!("{:.4}", paper::TABLE1_CPU_A[i]),
-            format!("{:.4}", paper::TABLE1_CPU_B[i]),
-            format!("{:.4}", paper::TABLE1_GPU_A[i]),
-        ]);
-    }
+    let published = table1_paper();
     let mut files = ours.write(&runner.out, "table1")?;
     files.extend(published.write(&runner.out, "table1_paper")?);
     let plot = runner.out.join("table1.svg");
-    let mut paper_series = vec![];
-    if let Some(scene) = paper::analogue(&runner.scene.name) {
-        let name = if scene == paper::PaperScene::A { "A" } else { "B" };
-        let as_xy = |points: Vec<(u32, f64)>| points.into_iter().map(|(n, f)| (n as f64, f)).collect();
-        let (cpu, gpu) = paper::table1_points(scene);
-        paper_series.push(Series {
-            label: format!("paper CPU, scene {name} (as read)"),
-            points: as_xy(cpu),
-        });
-        // The paper's GPU cube map beside ours only where ours is drawn (same colour).
-        if let (Some(gpu), Some(_)) = (gpu, &cubemap) {
-            paper_series.push(Series {
-                label: format!("paper GPU, scene {name} (as read)"),
-                points: as_xy(gpu),
-            });
-        }
-    }
+    let paper_series = table1_paper_series(runner, &cubemap);
     log_log_beside_paper(
         &plot,
         "f_diff against the reference",
@@ -278,6 +251,46 @@ pub fn table1(runner: &Runner) -> Result<Section> {
         tables: vec![ours, published],
         files,
     })
+}
+
+/// The paper's Table 1 as published, in the text's order.
+fn table1_paper() -> Table {
+    let mut published = Table::new(
+        "Table 1 (paper, in the text's order; the ray count of each value is uncertain)",
+        &["#", "CPU, scene A", "CPU, scene B", "GPU, scene A"],
+    );
+    for i in 0..paper::TABLE1_CPU_A.len() {
+        published.push(vec![
+            (i + 1).to_string(),
+            format!("{:.4}", paper::TABLE1_CPU_A[i]),
+            format!("{:.4}", paper::TABLE1_CPU_B[i]),
+            format!("{:.4}", paper::TABLE1_GPU_A[i]),
+        ]);
+    }
+    published
+}
+
+/// The paper's Table 1 as series for the plot, for this scene's paper analogue: its CPU
+/// column, and its GPU column where our cube map is drawn (`cubemap`).
+fn table1_paper_series(runner: &Runner, cubemap: &Option<String>) -> Vec<Series> {
+    let mut paper_series = vec![];
+    if let Some(scene) = paper::analogue(&runner.scene.name) {
+        let name = if scene == paper::PaperScene::A { "A" } else { "B" };
+        let as_xy = |points: Vec<(u32, f64)>| points.into_iter().map(|(n, f)| (n as f64, f)).collect();
+        let (cpu, gpu) = paper::table1_points(scene);
+        paper_series.push(Series {
+            label: format!("paper CPU, scene {name} (as read)"),
+            points: as_xy(cpu),
+        });
+        // The paper's GPU cube map beside ours only where ours is drawn (same colour).
+        if let (Some(gpu), Some(_)) = (gpu, cubemap) {
+            paper_series.push(Series {
+                label: format!("paper GPU, scene {name} (as read)"),
+                points: as_xy(gpu),
+            });
+        }
+    }
+    paper_series
 }
 
 fn table1_findings(sweep: &RaySweep) -> Vec<String> {
@@ -358,34 +371,8 @@ pub fn table2(runner: &Runner) -> Result<Section> {
             ],
         ));
     }
-    let mut published = Table::new(
-        "Table 2 (paper, 1024², Xeon E5420 vs GeForce 8800 GTX)",
-        &["rays", "CPU s", "GPU s"],
-    );
-    for row in &paper::TABLE2 {
-        published.push(vec![
-            row.rays.to_string(),
-            format!("{}", row.cpu_seconds),
-            format!("{}", row.gpu_seconds),
-        ]);
-    }
-    let (first, last) = (sweep.rows.first(), sweep.rows.last());
-    let (paper_first, paper_last) = (&paper::TABLE2[0], &paper::TABLE2[paper::TABLE2.len() - 1]);
-    let cube_ends = first.and_then(|a| a.cubemap).zip(last.and_then(|b| b.cubemap));
-    let findings = match (first, last, cube_ends) {
-        (Some(a), Some(b), Some((ca, cb))) => vec![format!(
-            "The cube map's cost hardly depends on N (paper, GPU: ×{:.2} from {} to {} rays): here, from {} to {} rays, gather's seconds grow ×{:.1} and the cube map's ({}) ×{:.1} — the CPU backend fills only the texels it looks up, so it scales like gathering; the GPU backend renders whole hemicubes (see `cargo bench --bench cubemap`).",
-            paper_last.gpu_seconds / paper_first.gpu_seconds,
-            paper_first.rays,
-            paper_last.rays,
-            a.rays,
-            b.rays,
-            b.gather_seconds / a.gather_seconds,
-            sweep.cubemap_backend.as_deref().unwrap_or("?"),
-            cb.seconds / ca.seconds
-        )],
-        _ => vec![],
-    };
+    let published = table2_paper();
+    let findings = table2_findings(&sweep);
     let mut files = ours.write(&runner.out, "table2")?;
     files.extend(published.write(&runner.out, "table2_paper")?);
     let plot = runner.out.join("table2.svg");
@@ -419,6 +406,44 @@ pub fn table2(runner: &Runner) -> Result<Section> {
         findings,
         ..Section::default()
     })
+}
+
+/// The paper's Table 2 as published.
+fn table2_paper() -> Table {
+    let mut published = Table::new(
+        "Table 2 (paper, 1024², Xeon E5420 vs GeForce 8800 GTX)",
+        &["rays", "CPU s", "GPU s"],
+    );
+    for row in &paper::TABLE2 {
+        published.push(vec![
+            row.rays.to_string(),
+            format!("{}", row.cpu_seconds),
+            format!("{}", row.gpu_seconds),
+        ]);
+    }
+    published
+}
+
+/// Table 2's finding: how the cube map's seconds grow with N against gather's, beside the
+/// paper's GPU.
+fn table2_findings(sweep: &RaySweep) -> Vec<String> {
+    let (first, last) = (sweep.rows.first(), sweep.rows.last());
+    let (paper_first, paper_last) = (&paper::TABLE2[0], &paper::TABLE2[paper::TABLE2.len() - 1]);
+    let cube_ends = first.and_then(|a| a.cubemap).zip(last.and_then(|b| b.cubemap));
+    match (first, last, cube_ends) {
+        (Some(a), Some(b), Some((ca, cb))) => vec![format!(
+            "The cube map's cost hardly depends on N (paper, GPU: ×{:.2} from {} to {} rays): here, from {} to {} rays, gather's seconds grow ×{:.1} and the cube map's ({}) ×{:.1} — the CPU backend fills only the texels it looks up, so it scales like gathering; the GPU backend renders whole hemicubes (see `cargo bench --bench cubemap`).",
+            paper_last.gpu_seconds / paper_first.gpu_seconds,
+            paper_first.rays,
+            paper_last.rays,
+            a.rays,
+            b.rays,
+            b.gather_seconds / a.gather_seconds,
+            sweep.cubemap_backend.as_deref().unwrap_or("?"),
+            cb.seconds / ca.seconds
+        )],
+        _ => vec![],
+    }
 }
 
 /// A table row or header: `head`, then `middle` where there is one, then `tail`.
