@@ -16,7 +16,7 @@ use crate::estimators::AovImage;
 use crate::image::HmdImage;
 pub use crate::options::Shard;
 use crate::render::Rendered;
-use crate::report::{CubemapDetails, PhaseSeconds, RenderReport};
+use crate::report::{CubemapDetails, PhaseSeconds, RenderReport, Seconds};
 pub use crate::report::{ShardReport, ShardTiming};
 
 /// One shard's output, as read back from its files.
@@ -135,55 +135,9 @@ fn merged_report(parts: &[Part], count: u32, width: u32, height: u32) -> Result<
     report.rays_cast = sum(|r| r.rays_cast);
     report.escaped_rays = sum(|r| r.escaped_rays);
     report.background_pixels = parts.iter().map(|p| p.report.background_pixels).sum();
+    report.seconds = summed_seconds(parts);
+    merge_method_details(&mut report, parts);
     let seconds = |p: &Part| p.report.seconds.total;
-    report.seconds.total = parts.iter().map(seconds).sum();
-    report.seconds.estimate = parts.iter().map(|p| p.report.seconds.estimate).sum();
-    report.seconds.primary = parts.iter().map(|p| p.report.seconds.primary).sum();
-    report.seconds.accel_build = parts.iter().map(|p| p.report.seconds.accel_build).sum();
-    report.seconds.load = parts.iter().map(|p| p.report.seconds.load).sum();
-    let phase = |f: fn(&PhaseSeconds) -> Option<f64>| {
-        parts
-            .iter()
-            .map(|p| f(&p.report.seconds.phases))
-            .sum::<Option<f64>>()
-    };
-    let phases = &mut report.seconds.phases;
-    phases.cubemap_build_and_lookup = phase(|p| p.cubemap_build_and_lookup);
-    phases.cubemap_build = phase(|p| p.cubemap_build);
-    phases.cubemap_lookup = phase(|p| p.cubemap_lookup);
-    phases.gather = phase(|p| p.gather);
-    phases.photon_trace = phase(|p| p.photon_trace);
-    phases.photon_index = phase(|p| p.photon_index);
-    phases.gpu_upload = phase(|p| p.gpu_upload);
-    phases.gpu_trace = phase(|p| p.gpu_trace);
-    phases.gpu_readback = phase(|p| p.gpu_readback);
-    if let Some(cubemap) = &mut report.details.cubemap {
-        let count = |f: fn(&CubemapDetails) -> u64| {
-            parts
-                .iter()
-                .map(|p| p.report.details.cubemap.as_ref().map_or(0, f))
-                .sum::<u64>()
-        };
-        cubemap.texels_rasterised = count(|c| c.texels_rasterised);
-        cubemap.lookups = count(|c| c.lookups);
-        cubemap.escaped_lookups = count(|c| c.escaped_lookups);
-    }
-    if let Some(photon) = &mut report.details.photon {
-        photon.holes = parts
-            .iter()
-            .map(|p| p.report.details.photon.as_ref().map_or(0, |d| d.holes))
-            .sum();
-        // Queries per second of the whole gather: each part's queries over all its seconds.
-        let (queries, gather_seconds) = parts
-            .iter()
-            .filter_map(|p| Some((p.report.details.photon.as_ref()?, p.report.seconds.phases.gather?)))
-            .fold((0.0, 0.0), |(q, s), (d, g)| {
-                (q + d.gather_queries_per_s * g, s + g)
-            });
-        if gather_seconds > 0.0 {
-            photon.gather_queries_per_s = queries / gather_seconds;
-        }
-    }
     // Means over the image's surface pixels, not shard 0's.
     let surface: Vec<f64> = parts
         .iter()
@@ -231,6 +185,65 @@ fn merged_report(parts: &[Part], count: u32, width: u32, height: u32) -> Result<
             .collect(),
     );
     Ok(report)
+}
+
+/// The parts' seconds, each phase summed (`null` where a part lacks it).
+fn summed_seconds(parts: &[Part]) -> Seconds {
+    let mut seconds = parts[0].report.seconds.clone();
+    seconds.total = parts.iter().map(|p| p.report.seconds.total).sum();
+    seconds.estimate = parts.iter().map(|p| p.report.seconds.estimate).sum();
+    seconds.primary = parts.iter().map(|p| p.report.seconds.primary).sum();
+    seconds.accel_build = parts.iter().map(|p| p.report.seconds.accel_build).sum();
+    seconds.load = parts.iter().map(|p| p.report.seconds.load).sum();
+    let phase = |f: fn(&PhaseSeconds) -> Option<f64>| {
+        parts
+            .iter()
+            .map(|p| f(&p.report.seconds.phases))
+            .sum::<Option<f64>>()
+    };
+    let phases = &mut seconds.phases;
+    phases.cubemap_build_and_lookup = phase(|p| p.cubemap_build_and_lookup);
+    phases.cubemap_build = phase(|p| p.cubemap_build);
+    phases.cubemap_lookup = phase(|p| p.cubemap_lookup);
+    phases.gather = phase(|p| p.gather);
+    phases.photon_trace = phase(|p| p.photon_trace);
+    phases.photon_index = phase(|p| p.photon_index);
+    phases.gpu_upload = phase(|p| p.gpu_upload);
+    phases.gpu_trace = phase(|p| p.gpu_trace);
+    phases.gpu_readback = phase(|p| p.gpu_readback);
+    seconds
+}
+
+/// The cube map's counts and the photon methods' holes summed over the parts, and the photon
+/// gather's queries per second over all their seconds.
+fn merge_method_details(report: &mut RenderReport, parts: &[Part]) {
+    if let Some(cubemap) = &mut report.details.cubemap {
+        let count = |f: fn(&CubemapDetails) -> u64| {
+            parts
+                .iter()
+                .map(|p| p.report.details.cubemap.as_ref().map_or(0, f))
+                .sum::<u64>()
+        };
+        cubemap.texels_rasterised = count(|c| c.texels_rasterised);
+        cubemap.lookups = count(|c| c.lookups);
+        cubemap.escaped_lookups = count(|c| c.escaped_lookups);
+    }
+    if let Some(photon) = &mut report.details.photon {
+        photon.holes = parts
+            .iter()
+            .map(|p| p.report.details.photon.as_ref().map_or(0, |d| d.holes))
+            .sum();
+        // Queries per second of the whole gather: each part's queries over all its seconds.
+        let (queries, gather_seconds) = parts
+            .iter()
+            .filter_map(|p| Some((p.report.details.photon.as_ref()?, p.report.seconds.phases.gather?)))
+            .fold((0.0, 0.0), |(q, s), (d, g)| {
+                (q + d.gather_queries_per_s * g, s + g)
+            });
+        if gather_seconds > 0.0 {
+            photon.gather_queries_per_s = queries / gather_seconds;
+        }
+    }
 }
 
 /// Why shards `a` and `b` are not parts of one render, or `None` where they are: a different
