@@ -111,7 +111,6 @@ pub fn log_log_with(
     front: &[(f64, f64, String)],
 ) -> Result<()> {
     let fail = |e: &dyn std::fmt::Display| Error::file(path, format!("cannot draw the plot: {e}"));
-    let usable = |&(x, y): &(f64, f64)| x > 0.0 && y > 0.0 && x.is_finite() && y.is_finite();
     let all: Vec<(f64, f64)> = series
         .iter()
         .flat_map(|(s, _)| s.points.iter().copied().filter(usable))
@@ -151,64 +150,9 @@ pub fn log_log_with(
             .y_label_formatter(&|v| short(*v))
             .draw()
             .map_err(|e| fail(&e))?;
-        for (place, (s, marks)) in series.iter().enumerate() {
-            let colour = &COLOURS[marks.colour.unwrap_or(place) % COLOURS.len()];
-            let points: Vec<(f64, f64)> = s.points.iter().copied().filter(usable).collect();
-            let line = colour.stroke_width(if marks.hollow { 1 } else { 2 });
-            match (marks.joined, marks.hollow) {
-                (true, false) => chart.draw_series(LineSeries::new(points.clone(), line)),
-                (true, true) => chart.draw_series(DashedLineSeries::new(points.clone(), 6, 4, line)),
-                (false, _) => chart.draw_series(std::iter::empty::<Circle<(f64, f64), i32>>()),
-            }
-            .map_err(|e| fail(&e))?
-            .label(&s.label)
-            .legend(move |(x, y)| {
-                let dot = Circle::new((10, 0), 3, if marks.hollow { line } else { colour.filled() });
-                let stroke = if marks.joined {
-                    line
-                } else {
-                    colour.mix(0.0).into()
-                };
-                EmptyElement::at((x, y)) + PathElement::new([(0, 0), (20, 0)], stroke) + dot
-            });
-            let marker = if marks.hollow {
-                colour.stroke_width(1)
-            } else {
-                colour.filled()
-            };
-            chart
-                .draw_series(
-                    points
-                        .into_iter()
-                        .map(|p| Circle::new(p, if marks.hollow { 4 } else { 3 }, marker)),
-                )
-                .map_err(|e| fail(&e))?;
-        }
+        draw_series(&mut chart, series, path)?;
         if !front.is_empty() {
-            // The staircase: from each front point right to the next one's x, then down to it.
-            let mut stairs = vec![(front[0].0, front[0].1)];
-            for pair in front.windows(2) {
-                stairs.push((pair[1].0, pair[0].1));
-                stairs.push((pair[1].0, pair[1].1));
-            }
-            chart
-                .draw_series(LineSeries::new(stairs, BLACK.stroke_width(1)))
-                .map_err(|e| fail(&e))?
-                .label("Pareto front")
-                .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK.stroke_width(1)));
-            // Labels below and left of their points: the front falls to the right, so that
-            // corner holds no image (one there would be faster and more accurate).
-            let font = ("sans-serif", 11)
-                .into_font()
-                .color(&BLACK)
-                .pos(Pos::new(HPos::Right, VPos::Top));
-            chart
-                .draw_series(front.iter().map(|(x, y, text)| {
-                    EmptyElement::at((*x, *y))
-                        + Circle::new((0, 0), 5, BLACK.stroke_width(1))
-                        + Text::new(text.clone(), (-5, 5), font.clone())
-                }))
-                .map_err(|e| fail(&e))?;
+            draw_front(&mut chart, front, path)?;
         }
         chart
             .configure_series_labels()
@@ -220,6 +164,91 @@ pub fn log_log_with(
         root.present().map_err(|e| fail(&e))?;
     }
     write_atomically(path, svg.as_bytes())
+}
+
+/// The chart [`log_log_with`] draws on.
+type LogLogChart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>;
+
+/// Whether a point can be drawn on log axes.
+fn usable(&(x, y): &(f64, f64)) -> bool {
+    x > 0.0 && y > 0.0 && x.is_finite() && y.is_finite()
+}
+
+/// Each of `series` as its [`Marks`] say, with its legend entry.
+fn draw_series<'a, 'b: 'a>(
+    chart: &mut LogLogChart<'a, 'b>,
+    series: &[(&Series, Marks)],
+    path: &Path,
+) -> Result<()> {
+    let fail = |e: &dyn std::fmt::Display| Error::file(path, format!("cannot draw the plot: {e}"));
+    for (place, &(s, marks)) in series.iter().enumerate() {
+        let colour = &COLOURS[marks.colour.unwrap_or(place) % COLOURS.len()];
+        let points: Vec<(f64, f64)> = s.points.iter().copied().filter(usable).collect();
+        let line = colour.stroke_width(if marks.hollow { 1 } else { 2 });
+        match (marks.joined, marks.hollow) {
+            (true, false) => chart.draw_series(LineSeries::new(points.clone(), line)),
+            (true, true) => chart.draw_series(DashedLineSeries::new(points.clone(), 6, 4, line)),
+            (false, _) => chart.draw_series(std::iter::empty::<Circle<(f64, f64), i32>>()),
+        }
+        .map_err(|e| fail(&e))?
+        .label(&s.label)
+        .legend(move |(x, y)| {
+            let dot = Circle::new((10, 0), 3, if marks.hollow { line } else { colour.filled() });
+            let stroke = if marks.joined {
+                line
+            } else {
+                colour.mix(0.0).into()
+            };
+            EmptyElement::at((x, y)) + PathElement::new([(0, 0), (20, 0)], stroke) + dot
+        });
+        let marker = if marks.hollow {
+            colour.stroke_width(1)
+        } else {
+            colour.filled()
+        };
+        chart
+            .draw_series(
+                points
+                    .into_iter()
+                    .map(|p| Circle::new(p, if marks.hollow { 4 } else { 3 }, marker)),
+            )
+            .map_err(|e| fail(&e))?;
+    }
+    Ok(())
+}
+
+/// The front: its points joined by a black staircase, each labelled.
+fn draw_front<'a, 'b: 'a>(
+    chart: &mut LogLogChart<'a, 'b>,
+    front: &[(f64, f64, String)],
+    path: &Path,
+) -> Result<()> {
+    let fail = |e: &dyn std::fmt::Display| Error::file(path, format!("cannot draw the plot: {e}"));
+    // The staircase: from each front point right to the next one's x, then down to it.
+    let mut stairs = vec![(front[0].0, front[0].1)];
+    for pair in front.windows(2) {
+        stairs.push((pair[1].0, pair[0].1));
+        stairs.push((pair[1].0, pair[1].1));
+    }
+    chart
+        .draw_series(LineSeries::new(stairs, BLACK.stroke_width(1)))
+        .map_err(|e| fail(&e))?
+        .label("Pareto front")
+        .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK.stroke_width(1)));
+    // Labels below and left of their points: the front falls to the right, so that
+    // corner holds no image (one there would be faster and more accurate).
+    let font = ("sans-serif", 11)
+        .into_font()
+        .color(&BLACK)
+        .pos(Pos::new(HPos::Right, VPos::Top));
+    chart
+        .draw_series(front.iter().map(|(x, y, text)| {
+            EmptyElement::at((*x, *y))
+                + Circle::new((0, 0), 5, BLACK.stroke_width(1))
+                + Text::new(text.clone(), (-5, 5), font.clone())
+        }))
+        .map_err(|e| fail(&e))?;
+    Ok(())
 }
 
 /// The corner of a log-log plot over `x` and `y` where the legend covers the fewest of
