@@ -166,6 +166,11 @@ unsafe fn horizontal_min(v: __m256) -> f32 {
     _mm_cvtss_f32(m)
 }
 
+/// One packet through the wide BVH: the packet descends while its lanes agree, splits into
+/// single-ray searches where they part, and records each lane's nearest hit. One function of
+/// ~170 lines on purpose: it is one loop whose node, leaf and stack steps share the lanes'
+/// masks and both stacks, and the hot loop whose figures docs/engine.md gives; helpers would
+/// have to take all of that state and be `inline(always)` to cost nothing.
 #[inline(always)]
 unsafe fn traverse<C: Counter>(
     bvh: &WideBvh,

@@ -161,7 +161,9 @@ impl Lanes for Avx2 {
 }
 
 /// [`Lanes::block`] of the block whose corners [`translated`] gave for this ray's origin and
-/// axis permutation.
+/// axis permutation. One function of ~110 lines on purpose: it is the watertight triangle
+/// test of Woop et al. written out over eight lanes (shear, edge functions, the
+/// double-precision fallback, depth), one straight-line computation in registers.
 ///
 /// # Safety
 /// The CPU must support AVX2 (called only inside the `#[target_feature]` traversals).
