@@ -287,38 +287,7 @@ pub fn sweep(
         .enumerate()
         .map_init(
             || Hemicubes::new(hemicube, context),
-            |hemicubes, (row, points)| {
-                let mut out = SweepRow {
-                    h: vec![vec![f32::NAN; width]; outputs],
-                    tallies: vec![Tally::default(); outputs],
-                    timing: Timing {
-                        lookups: vec![0.0; outputs],
-                        ..Timing::default()
-                    },
-                };
-                let mut h = vec![0.0; outputs];
-                for (x, point) in points.iter().enumerate() {
-                    if crate::interrupt::requested() {
-                        break;
-                    }
-                    if let Some(hit) = point {
-                        let pixel = (row * width + x) as u64;
-                        hemicubes.pixel(
-                            hit,
-                            pixel,
-                            &gathers,
-                            &mut out.tallies,
-                            &mut h,
-                            Some(&mut out.timing),
-                        );
-                        for (image, &value) in out.h.iter_mut().zip(&h) {
-                            image[x] = value;
-                        }
-                        progress.advance(1);
-                    }
-                }
-                out
-            },
+            |hemicubes, (row, points)| sweep_row(hemicubes, &gathers, (row, points), width, progress),
         )
         .collect();
     progress.finish();
@@ -378,4 +347,46 @@ pub fn sweep(
             (estimate, seconds)
         })
         .collect())
+}
+
+/// One image row of [`sweep`]: each surface pixel's hemicube filled once and looked up by
+/// every one of `gathers`.
+fn sweep_row(
+    hemicubes: &mut Hemicubes,
+    gathers: &[&Gather],
+    (row, points): (usize, &[Option<Hit>]),
+    width: usize,
+    progress: &dyn Progress,
+) -> SweepRow {
+    let outputs = gathers.len();
+    let mut out = SweepRow {
+        h: vec![vec![f32::NAN; width]; outputs],
+        tallies: vec![Tally::default(); outputs],
+        timing: Timing {
+            lookups: vec![0.0; outputs],
+            ..Timing::default()
+        },
+    };
+    let mut h = vec![0.0; outputs];
+    for (x, point) in points.iter().enumerate() {
+        if crate::interrupt::requested() {
+            break;
+        }
+        if let Some(hit) = point {
+            let pixel = (row * width + x) as u64;
+            hemicubes.pixel(
+                hit,
+                pixel,
+                gathers,
+                &mut out.tallies,
+                &mut h,
+                Some(&mut out.timing),
+            );
+            for (image, &value) in out.h.iter_mut().zip(&h) {
+                image[x] = value;
+            }
+            progress.advance(1);
+        }
+    }
+    out
 }
