@@ -23,8 +23,10 @@
 # (its `seconds.estimate`: directions, casting and sums, after the primary rays) against
 # embree_gather.c, which takes the same gather points (origin and normal per pixel), makes
 # the same stratified cosine directions with the same random numbers and frame, casts them
-# with rtcIntersect1 and sums 1/t per pixel, timed as a whole. Medians of RUNS interleaved
-# runs; ratio above 1: hmdist is faster. Timings drift ±10 %: compare within one run.
+# (in the loop or batched: EMBREE_CASTS below) and sums 1/t per pixel, timed as a whole
+# (the batched variants' generation also apart, gen_s). Medians of RUNS interleaved runs;
+# ratio above 1: hmdist is faster; the summary's last lines compare against the fastest
+# Embree variant of each build. Timings drift ±10 %: compare within one run.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 mode=cast
@@ -39,6 +41,11 @@ else
     cases="${1:-cube:256:256 cube:64:4096 hall:256:256 sphere5m:256:64}"
 fi
 runs="${2:-5}"
+# End to end: how embree_gather casts (EMBREE_CASTS): `loop` makes each ray inside the cast
+# loop; the others make every ray first on all threads, then cast them one at a time (1), as
+# packets (4, 8, 16) or as streams (stream). Every variant runs with the robust and the fast
+# build; the summary names the fastest of each build.
+casts="${EMBREE_CASTS:-loop 1 4 8 16 stream}"
 threads="$(nproc)"
 work="${HMDIST_COMPARE_DIR:-$(mktemp -d)}"
 mkdir -p "$work"
@@ -76,8 +83,11 @@ if [ "$mode" = e2e ]; then
             python3 -c 'import json, sys; d = json.load(open(sys.argv[1])); s = d["seconds"]
 print("hmdist build_s %.3f gather_s %.3f mrays_per_s %.3f total_s %.3f kernel %s bvh %s" % (
     s["accel_build"], s["estimate"], d["mrays_per_s"], s["total"], d["kernel"], d["bvh"]))' "$work/e2e.json" >>"$log"
-            "$work/embree_gather" "$obj" "$points" "$n" "$threads" robust >>"$log"
-            "$work/embree_gather" "$obj" "$points" "$n" "$threads" fast >>"$log"
+            for build in robust fast; do
+                for cast in $casts; do
+                    "$work/embree_gather" "$obj" "$points" "$n" "$threads" "$build" "$cast" >>"$log"
+                done
+            done
         done
         python3 - "$log" "$case" "$threads" <<'PY'
 import statistics, sys
@@ -86,13 +96,19 @@ runs = {}
 for line in open(log):
     words = line.split()
     runs.setdefault(words[0], []).append(dict(zip(words[1::2], words[2::2])))
-med = lambda name, key: statistics.median(float(r[key]) for r in runs[name])
+med = lambda name, key: statistics.median(float(r.get(key, 0)) for r in runs[name])
 ours = med("hmdist", "mrays_per_s")
 print(f"\n{case} end to end ({threads} threads, medians of {len(runs['hmdist'])} interleaved runs)")
-print(f"{'gather':<18} {'build_s':>8} {'gather_s':>9} {'Mrays/s':>8} {'hmdist ÷':>9}")
+print(f"{'gather':<26} {'build_s':>8} {'gen_s':>6} {'gather_s':>9} {'Mrays/s':>8} {'hmdist ÷':>9}")
 for name in runs:
     m = med(name, "mrays_per_s")
-    print(f"{name:<18} {med(name, 'build_s'):>8.2f} {med(name, 'gather_s'):>9.2f} {m:>8.2f} {ours / m:>9.2f}")
+    print(f"{name:<26} {med(name, 'build_s'):>8.2f} {med(name, 'gen_s'):>6.2f} {med(name, 'gather_s'):>9.2f} {m:>8.2f} {ours / m:>9.2f}")
+peers = [name for name in runs if name.startswith("embree")]
+for build in ("robust", "fast"):
+    mine = [name for name in peers if name.startswith(f"embree_e2e_{build}_")]
+    if mine:
+        best = max(mine, key=lambda name: med(name, "mrays_per_s"))
+        print(f"fastest Embree, {build} build: {best} — hmdist ÷ it {ours / med(best, 'mrays_per_s'):.2f}")
 PY
     done
     exit 0

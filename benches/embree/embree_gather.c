@@ -2,7 +2,7 @@
  * benches/embree/compare.sh's end-to-end mode: what a user who writes the gather around
  * Embree themselves would time against `hmdist render`.
  *
- *   embree_gather SCENE.obj POINTS.hmdp N THREADS robust|fast
+ *   embree_gather SCENE.obj POINTS.hmdp N THREADS robust|fast [CAST]
  *
  * SCENE.obj: `hmdist scene export`. POINTS.hmdp (gather_rays.rs `points`): per surface pixel
  * the gather origin (hmdist's robust offset of the primary hit), the unit normal facing the
@@ -11,9 +11,17 @@
  * most nearly square a x b grid of strata, jittered with the same counter-based random numbers
  * (seed 1, keyed by pixel and ray), turned into world space by the same frame (Duff et al.
  * 2017), cast with rtcIntersect1 (tnear = 1e-6 of the scene's diagonal, SPEC's d_min), and
- * H = N / sum(1/t) in double. Only the gather is timed: generation, casting and sums, as a
- * whole, from THREADS threads (pixels handed out 16 at a time). Prints one line:
- *   embree_e2e_robust build_s B gather_s S mrays_per_s M rays R escaped E mean_inverse I */
+ * H = N / sum(1/t) in double. Only the gather is timed: generation, casting and sums, from
+ * THREADS threads. CAST says how:
+ *   loop  (default) each ray made inside the cast loop and cast at once with rtcIntersect1
+ *         (pixels handed out 16 at a time);
+ *   1, 4, 8, 16, stream   every pixel's rays made first, for all pixels, on all threads
+ *         (timed apart: gen_s), then cast: one at a time (rtcIntersect1), as packets of 4,
+ *         8 or 16 consecutive rays of one pixel (rtcIntersect4/8/16), or as streams of 64
+ *         (rtcIntersect1M); sums per pixel in ray order as the loop.
+ * Prints one line:
+ *   embree_e2e_robust_loop build_s B gen_s G gather_s S mrays_per_s M rays R escaped E mean_inverse I
+ * (gather_s includes gen_s). */
 #include "embree_scene.h"
 #include <math.h>
 #include <pthread.h>
@@ -50,12 +58,38 @@ typedef struct {
     double inverse_sum;
 } Tally;
 
+/* The pixel's frame (Duff et al. 2017): tangent t, bitangent b. */
+static inline void frame_of(const float *n, float t[3], float b[3]) {
+    float sign = copysignf(1.0f, n[2]);
+    float fa = -1.0f / (sign + n[2]);
+    float fb = n[0] * n[1] * fa;
+    t[0] = 1.0f + sign * n[0] * n[0] * fa; t[1] = sign * fb; t[2] = -sign * n[0];
+    b[0] = fb; b[1] = sign + n[1] * n[1] * fa; b[2] = -n[1];
+}
+
+/* Ray j of a pixel whose random stream is `stream`: its world direction. */
+static inline void direction(uint64_t stream, uint32_t j, const float *n, const float *t, const float *b,
+                             float dir[3]) {
+    const float scale = 1.0f / (float)(1u << 24);
+    uint64_t bits = mix64(stream + (uint64_t)j * 0x9E3779B97F4A7C15ull);
+    float xi_x = (float)(bits >> 40) * scale, xi_y = (float)((bits >> 8) & 0xFFFFFF) * scale;
+    float ux = ((float)(j % grid_a) + xi_x) / (float)grid_a;
+    float uy = ((float)(j / grid_a) + xi_y) / (float)grid_b;
+    if (ux > 1.0f - 1.1920929e-7f) ux = 1.0f - 1.1920929e-7f;
+    if (uy > 1.0f - 1.1920929e-7f) uy = 1.0f - 1.1920929e-7f;
+    float sin_theta = sqrtf(ux), cos_theta = sqrtf(1.0f - ux);
+    float phi = 2.0f * (float)M_PI * uy;
+    float lx = cosf(phi) * sin_theta, ly = sinf(phi) * sin_theta, lz = cos_theta;
+    dir[0] = lx * t[0] + ly * b[0] + lz * n[0];
+    dir[1] = lx * t[1] + ly * b[1] + lz * n[1];
+    dir[2] = lx * t[2] + ly * b[2] + lz * n[2];
+}
+
 static void *gather(void *arg) {
     Tally *tally = arg;
     struct RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     const uint64_t key = mix64(1 ^ 0x9E3779B97F4A7C15ull); /* seed 1 */
-    const float scale = 1.0f / (float)(1u << 24);
     for (;;) {
         uint32_t first = atomic_fetch_add(&next_point, 16);
         if (first >= point_count) break;
@@ -63,30 +97,20 @@ static void *gather(void *arg) {
         for (uint32_t p = first; p < last; p++) {
             const Point *pt = &points[p];
             const float *n = pt->normal;
-            float sign = copysignf(1.0f, n[2]);
-            float fa = -1.0f / (sign + n[2]);
-            float fb = n[0] * n[1] * fa;
-            float t[3] = {1.0f + sign * n[0] * n[0] * fa, sign * fb, -sign * n[0]};
-            float b[3] = {fb, sign + n[1] * n[1] * fa, -n[1]};
+            float t[3], b[3];
+            frame_of(n, t, b);
             uint64_t stream = mix64(key ^ pt->pixel);
             double inverse_sum = 0.0;
             for (uint32_t j = 0; j < rays_per_point; j++) {
-                uint64_t bits = mix64(stream + (uint64_t)j * 0x9E3779B97F4A7C15ull);
-                float xi_x = (float)(bits >> 40) * scale, xi_y = (float)((bits >> 8) & 0xFFFFFF) * scale;
-                float ux = ((float)(j % grid_a) + xi_x) / (float)grid_a;
-                float uy = ((float)(j / grid_a) + xi_y) / (float)grid_b;
-                if (ux > 1.0f - 1.1920929e-7f) ux = 1.0f - 1.1920929e-7f;
-                if (uy > 1.0f - 1.1920929e-7f) uy = 1.0f - 1.1920929e-7f;
-                float sin_theta = sqrtf(ux), cos_theta = sqrtf(1.0f - ux);
-                float phi = 2.0f * (float)M_PI * uy;
-                float lx = cosf(phi) * sin_theta, ly = sinf(phi) * sin_theta, lz = cos_theta;
+                float dir[3];
+                direction(stream, j, n, t, b, dir);
                 struct RTCRayHit rh;
                 rh.ray.org_x = pt->origin[0];
                 rh.ray.org_y = pt->origin[1];
                 rh.ray.org_z = pt->origin[2];
-                rh.ray.dir_x = lx * t[0] + ly * b[0] + lz * n[0];
-                rh.ray.dir_y = lx * t[1] + ly * b[1] + lz * n[1];
-                rh.ray.dir_z = lx * t[2] + ly * b[2] + lz * n[2];
+                rh.ray.dir_x = dir[0];
+                rh.ray.dir_y = dir[1];
+                rh.ray.dir_z = dir[2];
                 rh.ray.tnear = tnear;
                 rh.ray.tfar = INFINITY;
                 rh.ray.time = 0.0f;
@@ -108,9 +132,112 @@ static void *gather(void *arg) {
     return NULL;
 }
 
+/* Batched: every pixel's directions first (`dirs`: N per pixel), then the cast. */
+static float *dirs;
+static int cast_width; /* 1, 4, 8, 16, or 0 for rtcIntersect1M streams of 64 */
+
+static void *generate(void *arg) {
+    (void)arg;
+    const uint64_t key = mix64(1 ^ 0x9E3779B97F4A7C15ull); /* seed 1 */
+    for (;;) {
+        uint32_t first = atomic_fetch_add(&next_point, 16);
+        if (first >= point_count) break;
+        uint32_t last = first + 16 < point_count ? first + 16 : point_count;
+        for (uint32_t p = first; p < last; p++) {
+            const float *n = points[p].normal;
+            float t[3], b[3];
+            frame_of(n, t, b);
+            uint64_t stream = mix64(key ^ points[p].pixel);
+            float *out = dirs + (size_t)p * rays_per_point * 3;
+            for (uint32_t j = 0; j < rays_per_point; j++) direction(stream, j, n, t, b, out + 3 * j);
+        }
+    }
+    return NULL;
+}
+
+/* Adds ray j's hit (t, or none) to the pixel's sums. */
+static inline void count_hit(Tally *tally, double *inverse_sum, unsigned geom, float t) {
+    if (geom == RTC_INVALID_GEOMETRY_ID)
+        tally->escaped++;
+    else
+        *inverse_sum += 1.0 / (double)(t > tnear ? t : tnear);
+}
+
+#define PACKET_CAST(K, RAYHIT, INTERSECT)                                                     \
+    for (uint32_t j0 = 0; j0 < rays_per_point; j0 += K) {                                     \
+        RAYHIT rh __attribute__((aligned(64)));                                               \
+        int valid[K] __attribute__((aligned(64)));                                            \
+        for (int k = 0; k < K; k++) {                                                         \
+            uint32_t j = j0 + k < rays_per_point ? j0 + k : j0;                               \
+            valid[k] = j0 + k < rays_per_point ? -1 : 0;                                      \
+            rh.ray.org_x[k] = o[0]; rh.ray.org_y[k] = o[1]; rh.ray.org_z[k] = o[2];           \
+            rh.ray.dir_x[k] = d[3 * j]; rh.ray.dir_y[k] = d[3 * j + 1]; rh.ray.dir_z[k] = d[3 * j + 2]; \
+            rh.ray.tnear[k] = tnear; rh.ray.tfar[k] = INFINITY; rh.ray.time[k] = 0.0f;        \
+            rh.ray.mask[k] = 0xFFFFFFFF; rh.ray.id[k] = 0; rh.ray.flags[k] = 0;               \
+            rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID; rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID; \
+        }                                                                                     \
+        INTERSECT(valid, scene, &context, &rh);                                               \
+        for (int k = 0; k < K && j0 + k < rays_per_point; k++)                                \
+            count_hit(tally, &inverse_sum, rh.hit.geomID[k], rh.ray.tfar[k]);                 \
+    }
+
+static void *cast(void *arg) {
+    Tally *tally = arg;
+    struct RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    struct RTCRayHit stream[64];
+    for (;;) {
+        uint32_t first = atomic_fetch_add(&next_point, 16);
+        if (first >= point_count) break;
+        uint32_t last = first + 16 < point_count ? first + 16 : point_count;
+        for (uint32_t p = first; p < last; p++) {
+            const float *o = points[p].origin;
+            const float *d = dirs + (size_t)p * rays_per_point * 3;
+            double inverse_sum = 0.0;
+            switch (cast_width) {
+            case 4: PACKET_CAST(4, struct RTCRayHit4, rtcIntersect4) break;
+            case 8: PACKET_CAST(8, struct RTCRayHit8, rtcIntersect8) break;
+            case 16: PACKET_CAST(16, struct RTCRayHit16, rtcIntersect16) break;
+            default: {
+                uint32_t width = cast_width == 1 ? 1 : 64;
+                for (uint32_t j0 = 0; j0 < rays_per_point; j0 += width) {
+                    uint32_t m = rays_per_point - j0 < width ? rays_per_point - j0 : width;
+                    for (uint32_t k = 0; k < m; k++) {
+                        struct RTCRayHit *rh = &stream[k];
+                        const float *dir = d + 3 * (j0 + k);
+                        rh->ray.org_x = o[0]; rh->ray.org_y = o[1]; rh->ray.org_z = o[2];
+                        rh->ray.dir_x = dir[0]; rh->ray.dir_y = dir[1]; rh->ray.dir_z = dir[2];
+                        rh->ray.tnear = tnear; rh->ray.tfar = INFINITY; rh->ray.time = 0.0f;
+                        rh->ray.mask = 0xFFFFFFFF; rh->ray.id = 0; rh->ray.flags = 0;
+                        rh->hit.geomID = RTC_INVALID_GEOMETRY_ID;
+                        rh->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+                    }
+                    if (width == 1)
+                        rtcIntersect1(scene, &context, &stream[0]);
+                    else
+                        rtcIntersect1M(scene, &context, stream, m, sizeof(struct RTCRayHit));
+                    for (uint32_t k = 0; k < m; k++)
+                        count_hit(tally, &inverse_sum, stream[k].hit.geomID, stream[k].ray.tfar);
+                }
+            }
+            }
+            tally->inverse_sum += inverse_sum;
+            hmd[p] = rays_per_point / inverse_sum;
+        }
+    }
+    return NULL;
+}
+
 int main(int argc, char **argv) {
-    if (argc != 6) {
-        fprintf(stderr, "usage: embree_gather SCENE.obj POINTS.hmdp N THREADS robust|fast\n");
+    if (argc != 6 && argc != 7) {
+        fprintf(stderr, "usage: embree_gather SCENE.obj POINTS.hmdp N THREADS robust|fast [loop|1|4|8|16|stream]\n");
+        return 2;
+    }
+    const char *mode = argc == 7 ? argv[6] : "loop";
+    int batched = strcmp(mode, "loop") != 0;
+    cast_width = strcmp(mode, "stream") == 0 ? 0 : atoi(mode);
+    if (batched && cast_width != 0 && cast_width != 1 && cast_width != 4 && cast_width != 8 && cast_width != 16) {
+        fprintf(stderr, "embree_gather: CAST is loop, 1, 4, 8, 16 or stream, not %s\n", mode);
         return 2;
     }
     rays_per_point = (uint32_t)atoi(argv[3]);
@@ -152,8 +279,16 @@ int main(int argc, char **argv) {
     pthread_t workers[64];
     Tally tallies[64];
     memset(tallies, 0, sizeof tallies);
-    double start = now();
-    for (int i = 0; i < threads; i++) pthread_create(&workers[i], NULL, gather, &tallies[i]);
+    double start = now(), generation = 0.0;
+    if (batched) {
+        dirs = malloc(sizeof(float) * 3 * (size_t)point_count * rays_per_point + 1);
+        if (!dirs) { fprintf(stderr, "embree_gather: no memory for the directions\n"); return 2; }
+        for (int i = 0; i < threads; i++) pthread_create(&workers[i], NULL, generate, NULL);
+        for (int i = 0; i < threads; i++) pthread_join(workers[i], NULL);
+        generation = now() - start;
+        atomic_store(&next_point, 0);
+    }
+    for (int i = 0; i < threads; i++) pthread_create(&workers[i], NULL, batched ? cast : gather, &tallies[i]);
     uint64_t escaped = 0;
     double inverse_sum = 0;
     for (int i = 0; i < threads; i++) {
@@ -163,8 +298,8 @@ int main(int argc, char **argv) {
     }
     double seconds = now() - start;
     double rays = (double)point_count * rays_per_point;
-    printf("embree_e2e_%s build_s %.3f gather_s %.3f mrays_per_s %.3f rays %.0f escaped %llu mean_inverse %.6f\n",
-           robust ? "robust" : "fast", build, seconds, rays / seconds / 1e6, rays,
+    printf("embree_e2e_%s_%s build_s %.3f gen_s %.3f gather_s %.3f mrays_per_s %.3f rays %.0f escaped %llu mean_inverse %.6f\n",
+           robust ? "robust" : "fast", mode, build, generation, seconds, rays / seconds / 1e6, rays,
            (unsigned long long)escaped, inverse_sum / rays);
     return 0;
 }
