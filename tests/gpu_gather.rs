@@ -15,7 +15,7 @@ use hmdist::gpu::{GpuRay, GpuScene};
 use hmdist::metrics::f_diff;
 use hmdist::points::{hmd_at, PointQuery, SurfacePoint};
 use hmdist::render::{primary_hits, RenderOptions, Rendered};
-use hmdist::sampling::Weighting;
+use hmdist::sampling::{Sampler, Weighting};
 use hmdist::scene::procedural::validation;
 use hmdist::scene::Scene;
 
@@ -80,6 +80,44 @@ fn gpu_gather_agrees_with_cpu_on_cube() {
         "gpu_gather_agrees_with_cpu_on_cube",
         &Scene::load("cube").unwrap(),
         None,
+    );
+}
+
+/// `--sampler sobol` on the GPU: each round the first points of its own scrambled Sobol
+/// sequence, as on the CPU (4 rounds of 64, so the replicates are exercised), within the grid's
+/// tolerance of the CPU image; and not the grid's image.
+#[test]
+fn gpu_sobol_gather_agrees_with_cpu_on_cube() {
+    let test = "gpu_sobol_gather_agrees_with_cpu_on_cube";
+    let scene = Scene::load("cube").unwrap();
+    let sobol = |backend| {
+        Gather::new(256, Weighting::Cosine)
+            .unwrap()
+            .with_rounds(4)
+            .unwrap()
+            .with_backend(backend)
+            .with_sampler(Sampler::Sobol)
+            .unwrap()
+    };
+    let Some(gpu) = gpu_render(test, &scene, sobol(Backend::GpuSoftware), 48, vec![]) else {
+        return;
+    };
+    let cpu = render_with(&scene, sobol(Backend::Cpu), 48, vec![]).unwrap();
+    let diff = f_diff(&cpu.image, &gpu.image, scene.diagonal()).unwrap();
+    println!("{test}: f_diff {:e} over {} pixels", diff.value, diff.compared);
+    assert!(diff.compared > 0 && diff.value <= 1e-4, "f_diff {}", diff.value);
+    let grid = render_with(
+        &scene,
+        gpu_gather(256).with_rounds(4).unwrap().with_backend(Backend::Cpu),
+        48,
+        vec![],
+    )
+    .unwrap();
+    let apart = f_diff(&grid.image, &gpu.image, scene.diagonal()).unwrap();
+    assert!(
+        apart.value > 1e-2,
+        "the GPU's sobol image is the grid's: f_diff {}",
+        apart.value
     );
 }
 

@@ -16,7 +16,7 @@ use crate::accel::GatherStart;
 use crate::backend::DispatchSplit;
 use crate::error::{DeviceErrorKind, Error, Result};
 use crate::progress::Progress;
-use crate::sampling::{strata, Weighting};
+use crate::sampling::{strata, Sampler, Weighting};
 
 /// Points per dispatch at most: 1 M points hold 64 MB of starts and 32 MB of state.
 pub const MAX_POINTS: u32 = 1 << 20;
@@ -50,6 +50,10 @@ struct Params {
     has_ao: u32,
     ao_radius: f32,
     cube_res: u32,
+    sampler: u32,
+    padding0: u32,
+    padding1: u32,
+    padding2: u32,
 }
 
 /// `State` in `gather.wgsl`: escaped, dmin, AO open (value, carry), AO total (value,
@@ -68,7 +72,7 @@ struct State {
 
 // The twins' sizes, checked as the crate compiles; the test below checks every member's offset
 // against the shader's.
-const _: () = assert!(std::mem::size_of::<Params>() == 64);
+const _: () = assert!(std::mem::size_of::<Params>() == 80);
 const _: () = assert!(std::mem::size_of::<State>() == 32);
 const _: () = assert!(std::mem::size_of::<[[f32; 4]; 4]>() == 64);
 
@@ -82,8 +86,8 @@ pub(crate) struct GpuGather<T> {
     pub readback_seconds: f64,
 }
 
-/// What to gather: `rays` rays per point as `rounds` rounds of stratified `weighting`
-/// directions (`gather`'s, see [`crate::estimators::Gather`]) with random numbers of `seed`;
+/// What to gather: `rays` rays per point as `rounds` rounds of `weighting` directions drawn by
+/// `sampler` (`gather`'s, see [`crate::estimators::Gather`]) with random numbers of `seed`;
 /// hits closer than `d_min` count as `d_min`, and hits beyond `t_max` (finite) as escapes
 /// at `t_max`; the `ao` AOV's figures where `ao_radius` is given. With `cube_res` R > 0 it is
 /// the cube map by rays (`cubemap --gpu-fill rays`): each direction looks up its texel of a
@@ -101,6 +105,9 @@ pub(crate) struct GatherJob {
     pub ao_radius: Option<f32>,
     pub split: Option<DispatchSplit>,
     pub cube_res: u32,
+    /// How the directions are drawn: each round a jittered grid, or (gather's rounds being
+    /// replicates) the first points of its own scrambled Sobol sequence.
+    pub sampler: Sampler,
 }
 
 /// One point's figures as the GPU summed them.
@@ -192,6 +199,10 @@ fn base_params(job: &GatherJob) -> Params {
         has_ao: job.ao_radius.is_some() as u32,
         ao_radius: job.ao_radius.unwrap_or(0.0),
         cube_res: job.cube_res,
+        sampler: (job.sampler == Sampler::Sobol) as u32,
+        padding0: 0,
+        padding1: 0,
+        padding2: 0,
     }
 }
 
@@ -337,7 +348,8 @@ mod tests {
         ]
         .concat();
         let params = host_layout!(Params: count, first_ray, end_ray, per_round, rounds, grid_a, grid_b,
-            weighting, seed, d_min, t_max, has_max, has_ao, ao_radius, cube_res);
+            weighting, seed, d_min, t_max, has_max, has_ao, ao_radius, cube_res, sampler, padding0, padding1,
+            padding2);
         assert_eq!(wgsl_struct_layout(&source, "GatherParams"), params);
         let state = host_layout!(State: escaped, dmin, ao_open, ao_total, rays, padding);
         assert_eq!(wgsl_struct_layout(&source, "State"), state);

@@ -22,6 +22,12 @@ struct GatherParams {
     ao_radius: f32,
     // R > 0: the cube map by rays (see `texel`), else gather.
     cube_res: u32,
+    // 0: each round a jittered grid; 1: each round the first points of its own scrambled
+    // Sobol sequence (replicate r for round r).
+    sampler: u32,
+    padding0: u32,
+    padding1: u32,
+    padding2: u32,
 };
 
 // Where a point's rays start: origin.w is the triangle they leave (bit pattern, NONE for
@@ -124,7 +130,13 @@ fn gather(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups)
             round = r;
             sum = sums[i * p.rounds + round];
         }
-        let w = hemisphere(p.weighting, stratified(g - r * p.per_round, p.grid_a, p.grid_b, random_pair(p.seed, key, g)));
+        var u: vec2<f32>;
+        if p.sampler == 1u {
+            u = progressive_point(p.seed, key, r, g - r * p.per_round);
+        } else {
+            u = stratified(g - r * p.per_round, p.grid_a, p.grid_b, random_pair(p.seed, key, g));
+        }
+        let w = hemisphere(p.weighting, u);
         state.rays++;
         var inverse = 0.0;
         if p.cube_res > 0u {

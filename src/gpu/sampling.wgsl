@@ -77,3 +77,56 @@ fn hemisphere(weighting: u32, u: vec2<f32>) -> vec3<f32> {
     let phi = 6.2831855 * (u.y - 0.5);
     return vec3(-cos(phi) * sin_theta, -sin(phi) * sin_theta, cos_theta);
 }
+
+// sampling::Stream::new(seed, stream).bits(counter), for any 64-bit counter.
+fn stream_bits(seed: vec2<u32>, stream: vec2<u32>, counter: vec2<u32>) -> vec2<u32> {
+    let key = mix64(seed ^ GOLDEN);
+    return mix64(add64(mix64(key ^ stream), mul64(counter, GOLDEN)));
+}
+
+// sampling::laine_karras: output bit k depends on input bits 0..=k only (Burley 2020).
+fn laine_karras(x0: u32, seed: u32) -> u32 {
+    var x = x0 + seed;
+    x ^= x * 0x6c50b47cu;
+    x ^= x * 0xb82f1e52u;
+    x ^= x * 0xc7afe638u;
+    x ^= x * 0x8d22f6e6u;
+    return x;
+}
+
+// sampling::owen_scramble: Owen's nested uniform scramble of a binary fraction.
+fn owen_scramble(x: u32, seed: u32) -> u32 {
+    return reverseBits(laine_karras(reverseBits(x), seed));
+}
+
+// sampling::sobol_pair: the first two Sobol dimensions at index i, as binary fractions (the
+// second's generator matrix bit by bit: Pascal's triangle mod 2).
+fn sobol_pair(i: u32) -> vec2<u32> {
+    var y = 0u;
+    var v = 0x80000000u;
+    var bits = i;
+    for (var k = 0u; k < 32u; k++) {
+        if bits == 0u {
+            break;
+        }
+        if (bits & 1u) != 0u {
+            y ^= v;
+        }
+        bits >>= 1u;
+        v ^= v >> 1u;
+    }
+    return vec2(reverseBits(i), y);
+}
+
+// sampling::Progressive::new(Stream::new(seed, stream), replicate).point(j): point j of the
+// point's scrambled progressive Sobol sequence `replicate`, in [0, 1)^2 (24 bits each).
+fn progressive_point(seed: vec2<u32>, stream: vec2<u32>, replicate: u32, j: u32) -> vec2<f32> {
+    // Counters 2^62 + 2 replicate and the one after it.
+    let a = stream_bits(seed, stream, vec2(2u * replicate, 0x40000000u));
+    let b = stream_bits(seed, stream, vec2(2u * replicate + 1u, 0x40000000u));
+    let xy = sobol_pair(owen_scramble(j, a.x));
+    let x = owen_scramble(xy.x, a.y);
+    let y = owen_scramble(xy.y, b.x);
+    let scale = 1.0 / 16777216.0;
+    return vec2(f32(x >> 8u) * scale, f32(y >> 8u) * scale);
+}

@@ -57,10 +57,6 @@ pub struct Gather {
     split: Option<DispatchSplit>,
 }
 
-/// Why a sampler other than the grid is refused on the GPU.
-const SAMPLER_ON_GPU: &str =
-    "sobol runs on the CPU backend only (the GPU gather makes grid directions): use --backend cpu";
-
 /// Rounds of gather rays when the `relerr` AOV is asked for and no rounds are named.
 pub const DEFAULT_ERROR_ROUNDS: u32 = 8;
 
@@ -77,7 +73,7 @@ pub struct GatherParams {
     #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Weighting::Cosine))]
     pub weighting: Weighting,
     /// How the directions fill the hemisphere: one jittered grid of the N rays, or a
-    /// progressive Owen-scrambled Sobol sequence (each round its own; CPU backend only).
+    /// progressive Owen-scrambled Sobol sequence (each round its own), on either backend.
     #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Sampler::Grid))]
     pub sampler: Sampler,
     /// Cast the rays as R independent rounds (R divides N), for the relerr AOV
@@ -177,20 +173,9 @@ impl Gather {
         Gather { backend, ..self }
     }
 
-    /// The directions drawn by `sampler` ([`Sampler::Grid`] by default). The GPU gather makes
-    /// grid directions only: [`Sampler::Sobol`] on [`Backend::Gpu`] or
-    /// [`Backend::GpuSoftware`] is refused, and [`Backend::Auto`] runs it on the CPU.
+    /// The directions drawn by `sampler` ([`Sampler::Grid`] by default), on either backend.
     pub fn with_sampler(self, sampler: Sampler) -> Result<Self> {
-        let backend = match (sampler, self.backend) {
-            (Sampler::Sobol, Backend::Auto) => Backend::Cpu,
-            (Sampler::Sobol, b) if b.is_gpu() => return Err(Error::invalid("sampler", SAMPLER_ON_GPU)),
-            (_, b) => b,
-        };
-        Ok(Gather {
-            sampler,
-            backend,
-            ..self
-        })
+        Ok(Gather { sampler, ..self })
     }
 
     /// How the directions are drawn.
@@ -216,13 +201,6 @@ impl Gather {
     /// The GPU to cast on, or `None` for the CPU: see [`Gather::with_backend`].
     #[cfg(feature = "gpu")]
     pub(crate) fn gpu(&self, accel: &crate::accel::Accel) -> Result<Option<crate::gpu::GpuScene>> {
-        if self.sampler != Sampler::Grid {
-            // The GPU gather makes grid directions only: see `with_sampler`.
-            return match self.backend.is_gpu() {
-                true => Err(Error::invalid("sampler", SAMPLER_ON_GPU)),
-                false => Ok(None),
-            };
-        }
         crate::gpu::open_for(self.backend, |software| {
             crate::gpu::GpuScene::new(accel, software)
         })
@@ -246,6 +224,7 @@ impl Gather {
             ao_radius,
             split: self.split,
             cube_res: 0,
+            sampler: self.sampler,
         }
     }
 
