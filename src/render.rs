@@ -185,6 +185,7 @@ fn output(
     estimate_seconds: f64,
 ) -> Rendered {
     let bounds = &setup.bounds;
+    let parameters = estimator.parameters();
     let mut report = RenderReport {
         hmdist_version: env!("CARGO_PKG_VERSION").into(),
         method: estimator.method().into(),
@@ -238,16 +239,12 @@ fn output(
                 rows_hash: None,
             }),
         shards: None,
-        rays: estimator.parameters().number("rays").map(|rays| rays as u32),
-        parameters: estimator.parameters(),
+        rays: parameters.number("rays").map(|rays| rays as u32),
+        parameters,
         details: estimate.details,
     };
     let image = HmdImage::new(options.width, options.height, estimate.hmd);
-    if let Some(part) = report.shard.as_mut() {
-        let shard = crate::options::Shard {
-            index: part.index,
-            count: part.count,
-        };
+    if let (Some(part), Some(shard)) = (report.shard.as_mut(), options.shard) {
         let channels: Vec<&[f32]> = std::iter::once(&image.data[..])
             .chain(estimate.aovs.iter().map(|a| &a.data[..]))
             .collect();

@@ -85,6 +85,16 @@ static inline void direction(uint64_t stream, uint32_t j, const float *n, const 
     dir[2] = lx * t[2] + ly * b[2] + lz * n[2];
 }
 
+/* A ray from `origin` along `dir`, from tnear on, with no hit yet. */
+static inline void init_ray(struct RTCRayHit *rh, const float *origin, const float *dir) {
+    rh->ray.org_x = origin[0]; rh->ray.org_y = origin[1]; rh->ray.org_z = origin[2];
+    rh->ray.dir_x = dir[0]; rh->ray.dir_y = dir[1]; rh->ray.dir_z = dir[2];
+    rh->ray.tnear = tnear; rh->ray.tfar = INFINITY; rh->ray.time = 0.0f;
+    rh->ray.mask = 0xFFFFFFFF; rh->ray.id = 0; rh->ray.flags = 0;
+    rh->hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+}
+
 static void *gather(void *arg) {
     Tally *tally = arg;
     struct RTCIntersectContext context;
@@ -105,20 +115,7 @@ static void *gather(void *arg) {
                 float dir[3];
                 direction(stream, j, n, t, b, dir);
                 struct RTCRayHit rh;
-                rh.ray.org_x = pt->origin[0];
-                rh.ray.org_y = pt->origin[1];
-                rh.ray.org_z = pt->origin[2];
-                rh.ray.dir_x = dir[0];
-                rh.ray.dir_y = dir[1];
-                rh.ray.dir_z = dir[2];
-                rh.ray.tnear = tnear;
-                rh.ray.tfar = INFINITY;
-                rh.ray.time = 0.0f;
-                rh.ray.mask = 0xFFFFFFFF;
-                rh.ray.id = 0;
-                rh.ray.flags = 0;
-                rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-                rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+                init_ray(&rh, pt->origin, dir);
                 rtcIntersect1(scene, &context, &rh);
                 if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
                     tally->escaped++;
@@ -202,16 +199,7 @@ static void *cast(void *arg) {
                 uint32_t width = cast_width == 1 ? 1 : 64;
                 for (uint32_t j0 = 0; j0 < rays_per_point; j0 += width) {
                     uint32_t m = rays_per_point - j0 < width ? rays_per_point - j0 : width;
-                    for (uint32_t k = 0; k < m; k++) {
-                        struct RTCRayHit *rh = &stream[k];
-                        const float *dir = d + 3 * (j0 + k);
-                        rh->ray.org_x = o[0]; rh->ray.org_y = o[1]; rh->ray.org_z = o[2];
-                        rh->ray.dir_x = dir[0]; rh->ray.dir_y = dir[1]; rh->ray.dir_z = dir[2];
-                        rh->ray.tnear = tnear; rh->ray.tfar = INFINITY; rh->ray.time = 0.0f;
-                        rh->ray.mask = 0xFFFFFFFF; rh->ray.id = 0; rh->ray.flags = 0;
-                        rh->hit.geomID = RTC_INVALID_GEOMETRY_ID;
-                        rh->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-                    }
+                    for (uint32_t k = 0; k < m; k++) init_ray(&stream[k], o, d + 3 * (j0 + k));
                     if (width == 1)
                         rtcIntersect1(scene, &context, &stream[0]);
                     else

@@ -123,16 +123,24 @@ fn gather(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups)
     var stack: Stack;
     var round = p.first_ray / p.per_round;
     var sum = sums[i * p.rounds + round];
+    // The round's Sobol sequence (sampler 1), made when the round begins.
+    var sequence = vec3(0u);
+    if p.sampler == 1u {
+        sequence = progressive(p.seed, key, round);
+    }
     for (var g = p.first_ray; g < p.end_ray; g++) {
         let r = g / p.per_round;
         if r != round {
             sums[i * p.rounds + round] = sum;
             round = r;
             sum = sums[i * p.rounds + round];
+            if p.sampler == 1u {
+                sequence = progressive(p.seed, key, round);
+            }
         }
         var u: vec2<f32>;
         if p.sampler == 1u {
-            u = progressive_point(p.seed, key, r, g - r * p.per_round);
+            u = progressive_point(sequence, g - r * p.per_round);
         } else {
             u = stratified(g - r * p.per_round, p.grid_a, p.grid_b, random_pair(p.seed, key, g));
         }

@@ -118,15 +118,22 @@ fn sobol_pair(i: u32) -> vec2<u32> {
     return vec2(reverseBits(i), y);
 }
 
-// sampling::Progressive::new(Stream::new(seed, stream), replicate).point(j): point j of the
-// point's scrambled progressive Sobol sequence `replicate`, in [0, 1)^2 (24 bits each).
-fn progressive_point(seed: vec2<u32>, stream: vec2<u32>, replicate: u32, j: u32) -> vec2<f32> {
+// sampling::Progressive::new(Stream::new(seed, stream), replicate): the point's scrambled
+// progressive Sobol sequence `replicate`, as its (shuffle, x scramble, y scramble). Made once
+// per round, not per ray.
+fn progressive(seed: vec2<u32>, stream: vec2<u32>, replicate: u32) -> vec3<u32> {
     // Counters 2^62 + 2 replicate and the one after it.
     let a = stream_bits(seed, stream, vec2(2u * replicate, 0x40000000u));
     let b = stream_bits(seed, stream, vec2(2u * replicate + 1u, 0x40000000u));
-    let xy = sobol_pair(owen_scramble(j, a.x));
-    let x = owen_scramble(xy.x, a.y);
-    let y = owen_scramble(xy.y, b.x);
+    return vec3(a.x, a.y, b.x);
+}
+
+// sampling::Progressive::point: point j of the sequence `scramble` (from `progressive`), in
+// [0, 1)^2 (24 bits each).
+fn progressive_point(scramble: vec3<u32>, j: u32) -> vec2<f32> {
+    let xy = sobol_pair(owen_scramble(j, scramble.x));
+    let x = owen_scramble(xy.x, scramble.y);
+    let y = owen_scramble(xy.y, scramble.z);
     let scale = 1.0 / 16777216.0;
     return vec2(f32(x >> 8u) * scale, f32(y >> 8u) * scale);
 }
