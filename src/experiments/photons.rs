@@ -2,6 +2,7 @@
 //! sources and lengths, map build cost and memory (paper Tables 3–4, Fig. 10, 14–17).
 
 use std::collections::BTreeMap;
+use std::path::PathBuf;
 use std::time::Instant;
 
 use super::grid::{crop, windows_differing_most, write_grid, Tile};
@@ -18,6 +19,7 @@ use crate::estimators::photon::{
     DEFAULT_ABSORPTION,
 };
 use crate::image::picture::grey;
+use crate::image::HmdImage;
 use crate::metrics::f_diff;
 
 /// The paper's short paths (Table 3, Fig. 10).
@@ -226,38 +228,7 @@ pub fn fig10(runner: &Runner) -> Result<Section> {
     write_grid(&path, &tiles, 3)?;
     let mut files = table.write(&runner.out, "fig10")?;
     files.push(path);
-    // The paper shows the fine parts close up (hands, feet): here the windows where the two
-    // methods differ most, at twice the size, each beside the reference.
-    let side = (p.size / 8).max(16).min(p.size);
-    let windows = windows_differing_most(&images[0], &images[1], side, CROPS);
-    let crops: Vec<Option<Tile>> = windows
-        .iter()
-        .flat_map(|&(x, y)| {
-            let at = format!(" at {x},{y}");
-            [
-                ("reference", &reference),
-                ("photon1", &images[0]),
-                ("photon2", &images[1]),
-            ]
-            .map(|(name, image)| {
-                Some(Tile {
-                    caption: format!("{name}{at}"),
-                    picture: crop(&grey(image, s), (x, y), side, 2),
-                })
-            })
-        })
-        .collect();
-    let notes = if crops.is_empty() {
-        vec![]
-    } else {
-        let path = runner.out.join("fig10_crops.png");
-        write_grid(&path, &crops, 3)?;
-        files.push(path);
-        vec![format!(
-            "fig10_crops.png: close-ups, as the paper's Fig. 10 shows the figures' hands and feet: the {} windows of {side}² pixels (x, y of the top-left corner) where methods I and II differ most, at twice the size; per row the reference, method I, method II.",
-            windows.len()
-        )]
-    };
+    let notes = closeups(runner, &reference, &images, &mut files)?;
     Ok(Section {
         name: "fig10".into(),
         tables: vec![table],
@@ -269,6 +240,82 @@ pub fn fig10(runner: &Runner) -> Result<Section> {
         notes,
         ..Section::default()
     })
+}
+
+/// Fig. 10's close-ups, as the paper shows its figures' hands and feet: per window a row of
+/// the reference, method I and method II at twice the size, into `fig10_crops.png`; the note
+/// that says which windows they are.
+fn closeups(
+    runner: &Runner,
+    reference: &HmdImage,
+    images: &[HmdImage],
+    files: &mut Vec<PathBuf>,
+) -> Result<Vec<String>> {
+    let size = runner.params.size;
+    let side = (size / 8).max(16).min(size);
+    let (windows, chosen) = match fine_parts(&runner.scene.name) {
+        Some(parts) => {
+            let corner = |f: f64| ((f * size as f64) as u32).min(size - side);
+            let windows = parts.map(|(name, x, y)| (name.to_string(), (corner(x), corner(y))));
+            (windows.to_vec(), "chosen by hand on the scene's fine parts")
+        }
+        None => {
+            let found = windows_differing_most(&images[0], &images[1], side, CROPS);
+            let windows = found.into_iter().map(|at| (String::new(), at)).collect();
+            (windows, "where methods I and II differ most")
+        }
+    };
+    let s = runner.scene.display_scale;
+    let crops: Vec<Option<Tile>> = windows
+        .iter()
+        .flat_map(|(part, (x, y))| {
+            [
+                ("reference", reference),
+                ("photon1", &images[0]),
+                ("photon2", &images[1]),
+            ]
+            .map(|(name, image)| {
+                Some(Tile {
+                    caption: format!("{name} {part}"),
+                    picture: crop(&grey(image, s), (*x, *y), side, 2),
+                })
+            })
+        })
+        .collect();
+    if crops.is_empty() {
+        return Ok(vec![]);
+    }
+    let path = runner.out.join("fig10_crops.png");
+    write_grid(&path, &crops, 3)?;
+    files.push(path);
+    let listed: Vec<String> = windows
+        .iter()
+        .map(|(part, (x, y))| format!("{part} at {x},{y}").trim_start().to_string())
+        .collect();
+    Ok(vec![format!(
+        "fig10_crops.png: close-ups, as the paper's Fig. 10 shows its figures' hands and feet: {} windows of {side}² pixels {chosen} ({}: x, y of the top-left corner), at twice the size; per row the reference, method I, method II.",
+        windows.len(),
+        listed.join("; ")
+    )])
+}
+
+/// The fine parts of the built-in scenes that Fig. 10's close-ups show, named, with the
+/// top-left corner of each window as fractions of the image's side (the windows are an
+/// eighth of the side). Other scenes get the windows where the two methods differ most.
+fn fine_parts(scene: &str) -> Option<[(&'static str, f64, f64); CROPS]> {
+    match scene {
+        "cube" => Some([
+            ("hand", 0.146, 0.186),
+            ("feet", 0.344, 0.664),
+            ("knot", 0.781, 0.391),
+        ]),
+        "hall" => Some([
+            ("chandelier", 0.264, 0.098),
+            ("figure", 0.791, 0.449),
+            ("chairs", 0.547, 0.684),
+        ]),
+        _ => None,
+    }
 }
 
 /// Fig. 16 (light source) and 17 (camera source): method II by max bounces (the paper's two
