@@ -213,6 +213,7 @@ fn adaptive_is_the_same_for_1_and_2_threads_and_keeps_to_its_budget() {
     let scene = Scene::load("cube").unwrap();
     let l_diag = scene.diagonal();
     let grid = AdaptiveParams {
+        sampler: Sampler::Grid,
         tolerance: 0.02,
         min_rays: 32,
         max_rays: 512,
@@ -305,6 +306,7 @@ fn an_adaptive_sobol_pixel_that_stops_at_n_rays_has_the_h_of_a_sobol_gather_of_n
         &scene,
         "adaptive",
         AdaptiveParams {
+            sampler: Sampler::Grid,
             tolerance: 1e9,
             min_rays: 64,
             ..AdaptiveParams::default()
@@ -315,6 +317,7 @@ fn an_adaptive_sobol_pixel_that_stops_at_n_rays_has_the_h_of_a_sobol_gather_of_n
     );
     let gather = GatherParams {
         rays: 64,
+        sampler: Sampler::Grid,
         ..GatherParams::default()
     };
     assert_ne!(
@@ -345,6 +348,7 @@ fn adaptive_refuses_a_stop_that_never_comes_and_negative_tolerances() {
 fn adaptive_stopping_at_its_first_check_is_gather_in_the_same_rounds() {
     let scene = Scene::load("cube").unwrap();
     let adaptive = AdaptiveParams {
+        sampler: Sampler::Grid,
         tolerance: 1e9,
         min_rays: 64,
         ..AdaptiveParams::default()
@@ -354,6 +358,7 @@ fn adaptive_stopping_at_its_first_check_is_gather_in_the_same_rounds() {
         rays: 64,
         rounds: Some(8),
         backend: Backend::Cpu,
+        sampler: Sampler::Grid,
         ..GatherParams::default()
     };
     let a = rendered(&scene, "adaptive", adaptive, 16, &[], 3);
@@ -366,6 +371,7 @@ fn adaptive_stopping_at_its_first_check_is_gather_in_the_same_rounds() {
         GatherParams {
             rays: 64,
             backend: Backend::Cpu,
+            sampler: Sampler::Grid,
             ..GatherParams::default()
         },
         16,

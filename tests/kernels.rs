@@ -305,20 +305,29 @@ fn both_presets_and_packets_give_the_same_hits_in_hall() {
 fn every_kernel_renders_the_same_exr_bytes() {
     let dir = std::env::temp_dir().join(format!("hmdist-kernels-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let mut reference: Option<Vec<u8>> = None;
-    for kernel in kernels() {
-        let out = dir.join(format!("{}.exr", kernel.name()));
-        let status = Command::new(env!("CARGO_BIN_EXE_hmdist"))
-            .args(["render", "--size", "48x40", "--rays", "64", "--quiet", "--out"])
-            .arg(&out)
-            .env("HMDIST_KERNEL", kernel.name())
-            .status()
-            .unwrap();
-        assert!(status.success());
-        let bytes = std::fs::read(&out).unwrap();
-        match &reference {
-            None => reference = Some(bytes),
-            Some(r) => assert!(r == &bytes, "{} renders other EXR bytes", kernel.name()),
+    // The default sampler (sobol: nets cast as packets of their boxes) and the grid (4 × 2
+    // blocks of strata).
+    for sampler in ["sobol", "grid"] {
+        let mut reference: Option<Vec<u8>> = None;
+        for kernel in kernels() {
+            let out = dir.join(format!("{}-{sampler}.exr", kernel.name()));
+            let status = Command::new(env!("CARGO_BIN_EXE_hmdist"))
+                .args(["render", "--size", "48x40", "--rays", "64", "--sampler", sampler])
+                .args(["--backend", "cpu", "--quiet", "--out"])
+                .arg(&out)
+                .env("HMDIST_KERNEL", kernel.name())
+                .status()
+                .unwrap();
+            assert!(status.success());
+            let bytes = std::fs::read(&out).unwrap();
+            match &reference {
+                None => reference = Some(bytes),
+                Some(r) => assert!(
+                    r == &bytes,
+                    "{} renders other EXR bytes ({sampler})",
+                    kernel.name()
+                ),
+            }
         }
     }
     std::fs::remove_dir_all(&dir).unwrap();

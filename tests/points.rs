@@ -11,7 +11,7 @@ use hmdist::estimators::Gather;
 use hmdist::points::{hmd_at, PointQuery, SurfacePoint};
 use hmdist::progress::Silent;
 use hmdist::render::{primary_hits, render, RenderOptions};
-use hmdist::sampling::Weighting;
+use hmdist::sampling::{Sampler, Weighting};
 use hmdist::scene::procedural::validation;
 use hmdist::scene::Scene;
 
@@ -199,8 +199,19 @@ fn hmdist_points_on_the_images_hits_matches_the_image_from_npy_and_csv() {
         .collect();
     dir.write("hits.csv", csv);
     let rays = RAYS.to_string();
+    // The image's sampler (the library's `Gather::new` starts from the grid).
     let run = |input: &str, output: &str| {
-        hmdist_ok(dir.path(), &["points", "--quiet", "--rays", &rays, input, output]);
+        let args = [
+            "points",
+            "--quiet",
+            "--rays",
+            &rays,
+            "--sampler",
+            "grid",
+            input,
+            output,
+        ];
+        hmdist_ok(dir.path(), &args);
     };
     run("hits32.npy", "h32.npy");
     run("hits64.npy", "h64.npy");
@@ -227,6 +238,29 @@ fn hmdist_points_on_the_images_hits_matches_the_image_from_npy_and_csv() {
     let (median, p99) = (relative[n / 2], relative[n * 99 / 100]);
     println!("relative difference from the image: median {median:e}, 99th percentile {p99:e}");
     assert!(median < 1e-5 && p99 < 1e-3, "median {median:e}, p99 {p99:e}");
+    // Without --sampler, the rows' H is the library's with the sobol sampler, bit for bit.
+    hmdist_ok(
+        dir.path(),
+        &["points", "--quiet", "--rays", &rays, "hits32.npy", "hs.npy"],
+    );
+    let default = read_npy_f32(&std::fs::read(dir.join("hs.npy")).unwrap(), n);
+    let bare: Vec<SurfacePoint> = rows
+        .iter()
+        .map(|r| SurfacePoint::new(Vec3::new(r[0], r[1], r[2]), Vec3::new(r[3], r[4], r[5])).unwrap())
+        .collect();
+    let sobol = Gather::new(RAYS, Weighting::Cosine)
+        .unwrap()
+        .with_sampler(Sampler::Sobol)
+        .unwrap();
+    let query = PointQuery::new(sobol, 1, None).unwrap();
+    let scene = Scene::load("cube").unwrap();
+    // The BVH the CLI builds for this work (an exact tie may resolve otherwise in another).
+    let rays = bare.len() as u64 * RAYS as u64;
+    let kernel = hmdist::accel::Kernel::from_env().unwrap();
+    let (accel, _) = Accel::for_work(&scene.mesh, BuildQuality::Auto, rays, kernel).unwrap();
+    let library = hmd_at(&scene, &accel, &query, &bare, None).unwrap();
+    assert_eq!(bits(&default), bits(&library));
+    assert_ne!(bits(&default), bits(&h32));
 }
 
 #[test]

@@ -1,7 +1,8 @@
-//! The progressive sampler of `gather` (`--sampler sobol`, issue #25): the closed forms of
-//! SPEC §1 hold with it, it is deterministic across thread counts, each round is its own
-//! sequence, and the GPU, which makes grid directions only, refuses it by name. (Its
-//! stratification, every power-of-two prefix a (0,k,2)-net, is tested in `sampling.rs`.)
+//! The progressive sampler of `gather` (`--sampler sobol`, issue #25; the default since
+//! issue #54): the closed forms of SPEC §1 hold with it, it is deterministic across thread
+//! counts, each round is its own sequence, every backend takes it, and `--sampler grid` still
+//! names the jittered grid. (Its stratification, every power-of-two prefix a (0,k,2)-net, is
+//! tested in `sampling.rs`.)
 
 mod common;
 
@@ -62,9 +63,17 @@ fn sobol_gather_is_the_same_for_1_and_2_threads_and_not_the_grid() {
     let one = rendered(&scene, sobol(64, Weighting::Cosine, 1).as_ref(), 24, Some(1));
     let two = rendered(&scene, sobol(64, Weighting::Cosine, 1).as_ref(), 24, Some(2));
     assert_eq!(bits(&one), bits(&two));
-    let grid = registry::build("gather", &serde_json::json!({"rays": 64}), &[]).unwrap();
-    let grid = rendered(&scene, grid.as_ref(), 24, Some(2));
+    let grid = serde_json::json!({"rays": 64, "sampler": "grid"});
+    let grid = rendered(
+        &scene,
+        registry::build("gather", &grid, &[]).unwrap().as_ref(),
+        24,
+        Some(2),
+    );
     assert_ne!(bits(&one), bits(&grid));
+    // Sobol is the default.
+    let default = registry::build("gather", &serde_json::json!({"rays": 64}), &[]).unwrap();
+    assert_eq!(bits(&one), bits(&rendered(&scene, default.as_ref(), 24, Some(1))));
     // Two rounds of 32 are two sequences, not the first 64 points of one.
     let rounds = rendered(&scene, sobol(64, Weighting::Cosine, 2).as_ref(), 24, Some(2));
     assert_ne!(bits(&one), bits(&rounds));
@@ -90,10 +99,12 @@ fn every_backend_takes_the_sobol_sampler() {
 fn hmdist_render_takes_the_sampler_flag() {
     use common::cli::{hmdist_ok, read_json, refuses, render_args};
     let dir = common::Scratch::new("sampler-cli");
-    let mut args = render_args(&["--sampler", "sobol", "--backend", "cpu"]);
-    args.extend(["--out", "s.exr"]);
-    hmdist_ok(dir.path(), &args);
-    assert_eq!(read_json(&dir.join("s.json"))["parameters"]["sampler"], "sobol");
+    for (flags, sampler) in [(&["--sampler", "grid"][..], "grid"), (&[][..], "sobol")] {
+        let mut args = render_args(&[flags, &["--backend", "cpu"][..]].concat());
+        args.extend(["--out", "s.exr"]);
+        hmdist_ok(dir.path(), &args);
+        assert_eq!(read_json(&dir.join("s.json"))["parameters"]["sampler"], sampler);
+    }
     refuses(
         "sampler-cubemap",
         &[],

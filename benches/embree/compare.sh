@@ -79,7 +79,7 @@ if [ "$mode" = e2e ]; then
         : >"$log"
         for _ in $(seq "$runs"); do
             "$hmdist" render --quiet --scene "$scene" --size "${side}x$side" --rays "$n" --threads "$threads" \
-                --out "$work/e2e.exr" --json "$work/e2e.json" >/dev/null
+                --sampler grid --out "$work/e2e.exr" --json "$work/e2e.json" >/dev/null
             python3 -c 'import json, sys; d = json.load(open(sys.argv[1])); s = d["seconds"]
 print("hmdist build_s %.3f gather_s %.3f mrays_per_s %.3f total_s %.3f kernel %s bvh %s" % (
     s["accel_build"], s["estimate"], d["mrays_per_s"], s["total"], d["kernel"], d["bvh"]))' "$work/e2e.json" >>"$log"

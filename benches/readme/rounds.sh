@@ -9,7 +9,7 @@ hmdist="$(realpath "${1:-target/release/hmdist}")"
 dir="$(mktemp -d)"
 trap 'rm -rf "$dir"' EXIT
 cd "$dir"
-"$hmdist" render --quiet --size 48x48 --rays 16384 --out reference.exr
+"$hmdist" render --quiet --size 48x48 --rays 16384 --sampler grid --out reference.exr
 for sampler in grid sobol; do
     for rounds in 1 8 32; do
         "$hmdist" render --quiet --size 48x48 --rays 256 --rounds "$rounds" --sampler "$sampler" \

@@ -48,7 +48,7 @@ echo "CPU: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | xargs), $(npro
 "$bin" gpu list 2>&1
 
 step "smoke: cube ${side}² × 256, --backend gpu"
-timeout 60 "$bin" render --scene cube --size "${side}x${side}" --rays 256 --backend gpu \
+timeout 60 "$bin" render --scene cube --size "${side}x${side}" --rays 256 --sampler grid --backend gpu \
     --out /tmp/smoke.exr --quiet 2>&1
 json /tmp/smoke.json
 
@@ -57,7 +57,7 @@ HMDIST_BENCH_PRESETS= HMDIST_BENCH_GPU_SIZE=$side timeout 120 "$bins/gather" 2>&
 
 step "the paper's reference on the GPU: its first sixteenth, to time it"
 ref=(--scene cube --size "${side}x${side}" --rays "${REF_RAYS:-65536}" --seed 1000003 --bvh high
-     --backend gpu --quiet)
+     --sampler grid --backend gpu --quiet)
 timeout 120 "$bin" render "${ref[@]}" --shard 0/16 --out /tmp/ref_s0.exr 2>&1
 json /tmp/ref_s0.json
 # The build, then 16 times the first part's cast with 30 % to spare.

@@ -214,13 +214,14 @@ class Scene:
     def hmd_at(self, points: Vectors, normals: Vectors, rays: Count = DEFAULT_RAYS, seed: Count = DEFAULT_SEED,
                keys: npt.ArrayLike | None = None, weighting: str = "cosine",
                max_distance: float | None = None, triangles: npt.ArrayLike | None = None,
-               errors: Vectors | None = None, backend: str = "auto") -> Any:
+               errors: Vectors | None = None, backend: str = "auto", sampler: str = "sobol") -> Any:
         """H at each point (float32 [n]; [...] for points [..., 3], a float32 scalar for one
         point [3]) from `rays` gather rays around its normal; point i's random numbers are
         keyed by keys[i] (default i), as pixel i's are in an image. `triangles` (the triangle
         each point lies on) and `errors` (its floating-point error bound [n, 3]), as
         `primary_hits` gives them, start the rays exactly as the image's. `backend` ("auto",
-        "gpu", "gpu-software", "cpu") says where the rays are cast, as render's does."""
+        "gpu", "gpu-software", "cpu") says where the rays are cast, and `sampler` ("sobol" or
+        "grid") how the directions fill the hemisphere, as render's do."""
         p, lead = _vectors("points", points)
         n, _ = _vectors("normals", normals, like=lead)
         count = p.shape[0]
@@ -229,7 +230,7 @@ class Scene:
         e = None if errors is None else _vectors("errors", errors, like=lead)[0]
         h = self._inner.hmd_at(p, n, _whole("rays", rays, 2**32 - 1), _whole("seed", seed, 2**64 - 1),
                                k, weighting, None if max_distance is None else float(max_distance),
-                               t, e, backend)
+                               t, e, backend, sampler)
         return _shaped(h, lead)
 
     def cast(self, origins: Vectors, directions: Vectors) -> Any:

@@ -68,6 +68,7 @@ class Scene:
         triangles: Optional[npt.NDArray[np.uint64]] = None,
         errors: Optional[npt.NDArray[np.float64]] = None,
         backend: str = "auto",
+        sampler: str = "sobol",
     ) -> npt.NDArray[np.float32]: ...
     def cast(
         self, origins: npt.NDArray[np.float64], directions: npt.NDArray[np.float64]

@@ -445,9 +445,10 @@ impl PyScene {
     /// H at points [n, 3] with normals [n, 3] (float64), float32 [n]: point i's random
     /// numbers keyed by `keys[i]` (uint64 [n]) or by i; optionally the triangle each lies on
     /// (uint64 [n]) and its error bound (float64 [n, 3]), as `primary_hits` gives them; the
-    /// rays cast on `backend` (auto, gpu, gpu-software, cpu), as `render`'s are.
+    /// rays cast on `backend` (auto, gpu, gpu-software, cpu) with directions from `sampler`
+    /// (sobol, grid), as `render`'s are.
     #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (points, normals, rays, seed, keys, weighting, max_distance, triangles = None, errors = None, backend = "auto"))]
+    #[pyo3(signature = (points, normals, rays, seed, keys, weighting, max_distance, triangles = None, errors = None, backend = "auto", sampler = "sobol"))]
     fn hmd_at<'py>(
         &self,
         py: Python<'py>,
@@ -461,6 +462,7 @@ impl PyScene {
         triangles: Option<PyReadonlyArray1<'py, u64>>,
         errors: Option<PyReadonlyArray2<'py, f64>>,
         backend: &str,
+        sampler: &str,
     ) -> PyResult<Bound<'py, PyArray1<f32>>> {
         let (p, n) = (vectors(&points)?, vectors(&normals)?);
         let triangles = match &triangles {
@@ -490,7 +492,9 @@ impl PyScene {
         };
         let gather = Gather::new(rays, named("weighting", weighting)?)
             .map_err(py_error)?
-            .with_backend(named("backend", backend)?);
+            .with_backend(named("backend", backend)?)
+            .with_sampler(named("sampler", sampler)?)
+            .map_err(py_error)?;
         let query = PointQuery::new(gather, seed, max_distance).map_err(py_error)?;
         let accel = self.accel(py)?;
         let scene = &self.scene;

@@ -251,10 +251,12 @@ def test_a_missing_gpu_raises_device_error() -> None:
 
 
 def test_a_method_parameter_added_to_its_struct_is_a_keyword() -> None:
-    # `sampler` is one field of gather's parameter struct, nothing on the Python side.
+    # `sampler` is one field of gather's parameter struct, nothing on the Python side; sobol
+    # is its default.
     s = hmdist.Scene.builtin("cube")
-    grid, _ = s.render(size=(8, 6), rays=16, seed=4)
-    sobol, report = s.render(size=(8, 6), rays=16, seed=4, sampler="sobol")
+    grid, report = s.render(size=(8, 6), rays=16, seed=4, sampler="grid")
+    assert np.isfinite(grid).all() and report["parameters"]["sampler"] == "grid"
+    sobol, report = s.render(size=(8, 6), rays=16, seed=4)
     assert np.isfinite(sobol).all() and report["parameters"]["sampler"] == "sobol"
     assert not np.array_equal(grid, sobol)
     with pytest.raises(ValueError, match="sampler"):

@@ -16,7 +16,7 @@ use hmdist::image::OutputSet;
 use hmdist::points::file::{encode_values, read_rows, PointFormat};
 use hmdist::points::{hmd_at, PointQuery, SurfacePoint};
 use hmdist::render::DEFAULT_SEED;
-use hmdist::sampling::Weighting;
+use hmdist::sampling::{Sampler, Weighting};
 use hmdist::scene::Scene;
 
 use super::bar::Bar;
@@ -41,6 +41,10 @@ pub struct PointsArgs {
     /// Direction weighting over the hemisphere.
     #[arg(long, value_enum, default_value_t = Weighting::Cosine)]
     weighting: Weighting,
+    /// How the directions fill the hemisphere: a progressive Owen-scrambled Sobol sequence,
+    /// or one jittered grid of the N rays (SPEC §3.1), as `render`'s gather.
+    #[arg(long, value_enum, default_value_t = Sampler::Sobol)]
+    sampler: Sampler,
     /// Where the rays are cast: auto takes a hardware GPU where there is one.
     #[arg(long, value_enum, default_value_t = Backend::Auto)]
     backend: Backend,
@@ -54,7 +58,9 @@ pub struct PointsArgs {
 
 pub fn run(args: PointsArgs) -> Result<()> {
     let query = PointQuery::new(
-        Gather::new(args.rays, args.weighting)?.with_backend(args.backend),
+        Gather::new(args.rays, args.weighting)?
+            .with_backend(args.backend)
+            .with_sampler(args.sampler)?,
         args.seed,
         args.max_distance,
     )?;

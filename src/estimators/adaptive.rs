@@ -9,12 +9,13 @@
 //! error most), or another round would pass `max_rays`. A pixel's rounds depend only on its
 //! own rays: the image is the same for any thread count.
 //!
-//! With the grid sampler (the default) each round is its own jittered stratified grid, as
-//! `gather`'s rounds: a pixel that stops at N rays has the H of `gather --rays N --rounds
-//! N/(min_rays/8)`. With `--sampler sobol` the rounds are consecutive blocks of one
-//! Owen-scrambled Sobol sequence (`Rounds::Blocks` in `gather/directions.rs`): a pixel that
-//! stops at N rays has the H of `gather --sampler sobol --rays N`, so going on costs no
-//! stratification; the blocks' spread overstates the error (a conservative stop).
+//! With the Sobol sampler (the default of `AdaptiveParams`, so of the CLI and Python) the
+//! rounds are consecutive blocks of one Owen-scrambled Sobol sequence (`Rounds::Blocks` in
+//! `gather/directions.rs`): a pixel that stops at N rays has the H of `gather --rays N`, so
+//! going on costs no stratification; the blocks' spread overstates the error (a
+//! conservative stop). With `--sampler grid` (and [`Adaptive::new`]'s default) each round
+//! is its own jittered stratified grid, as `gather`'s rounds: a pixel that stops at N rays
+//! has the H of `gather --sampler grid --rays N --rounds N/(min_rays/8)`.
 
 use super::gather::PointGather;
 use super::gather::Rounds;
@@ -48,7 +49,7 @@ pub struct AdaptiveParams {
     pub weighting: Weighting,
     /// How the directions fill the hemisphere: rounds that are each a jittered grid, or
     /// consecutive blocks of one progressive Owen-scrambled Sobol sequence.
-    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Sampler::Grid))]
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Sampler::Sobol))]
     pub sampler: Sampler,
     /// A pixel stops once the standard error of its H is below T · H + A · l_diag (T
     /// relative, A absolute in units of the scene's diagonal), loosened by --loosen.
@@ -199,8 +200,9 @@ impl Adaptive {
         Ok(Adaptive { loosen, ..self })
     }
 
-    /// The directions drawn by `sampler`: rounds of jittered grids ([`Sampler::Grid`], the
-    /// default) or consecutive blocks of one progressive sequence ([`Sampler::Sobol`]).
+    /// The directions drawn by `sampler`: rounds of jittered grids ([`Sampler::Grid`], this
+    /// builder's default, SPEC §3.1) or consecutive blocks of one progressive sequence
+    /// ([`Sampler::Sobol`], the default of [`AdaptiveParams`] and so of the CLI and Python).
     pub fn with_sampler(self, sampler: Sampler) -> Self {
         Adaptive { sampler, ..self }
     }

@@ -312,6 +312,7 @@ mod tests {
     fn gather_params(rays: u32) -> GatherParams {
         GatherParams {
             rays,
+            sampler: crate::sampling::Sampler::Grid,
             ..GatherParams::default()
         }
     }

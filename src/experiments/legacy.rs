@@ -180,7 +180,8 @@ mod tests {
 
     /// The stems of earlier versions, rebuilt from today's parameters, are the ones those
     /// versions gave: each expected pair below was printed by the version before the
-    /// parameters became an object (`0f727e0`), for `slab` at 16² with the CPU backend.
+    /// parameters became an object (`0f727e0`), for `slab` at 16² with the CPU backend. That
+    /// version's default sampler was the grid, so the grid is named where it printed none.
     #[test]
     fn the_earlier_keys_are_rebuilt_as_those_versions_made_them() {
         let out = std::env::temp_dir().join(format!("hmdist-legacy-stems-{}", std::process::id()));
@@ -192,7 +193,7 @@ mod tests {
         let cases = [
             (
                 "gather",
-                r#"{"rays":8}"#,
+                r#"{"rays":8,"sampler":"grid"}"#,
                 "gather-7eea6ad9ce8fbfcc",
                 "gather-14598e0d36664d71",
             ),
@@ -210,7 +211,7 @@ mod tests {
             ),
             (
                 "adaptive",
-                r#"{}"#,
+                r#"{"sampler":"grid"}"#,
                 "adaptive-9afd917d46ac15d2",
                 "adaptive-4fce40065ab3b5a9",
             ),

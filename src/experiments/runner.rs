@@ -13,6 +13,7 @@ use crate::image::{exr, write_atomically, HmdImage};
 use crate::progress::{Progress, Silent};
 use crate::render::RenderOptions;
 use crate::report::RenderReport;
+use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::shard::Shard;
 
@@ -245,10 +246,12 @@ impl<'a> Runner<'a> {
         self.shard.as_ref().map(|s| (s.rendered.get(), s.stand_ins.get()))
     }
 
-    /// The reference image's parameters: gather with the preset's reference ray count.
+    /// The reference image's parameters: gather with the preset's reference ray count, on the
+    /// jittered grid (SPEC §3.1), so that the committed references keep their cache keys.
     pub fn reference_params(&self) -> GatherParams {
         GatherParams {
             rays: self.params.reference_rays,
+            sampler: Sampler::Grid,
             ..GatherParams::default()
         }
     }

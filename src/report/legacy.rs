@@ -41,7 +41,7 @@ pub struct GatherGroup {
     /// The stratification grid `a × b` of one round.
     pub strata: [u32; 2],
     pub rounds: u32,
-    #[serde(default, skip_serializing_if = "Sampler::is_grid")]
+    #[serde(default = "Sampler::unnamed", skip_serializing_if = "Sampler::is_grid")]
     pub sampler: Sampler,
 }
 

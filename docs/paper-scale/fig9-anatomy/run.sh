@@ -28,7 +28,7 @@ render() { # NAME ARGS...
     shift
     if [ ! -f "$out/$name.json" ]; then
         local start=$SECONDS
-        "$hmdist" render --scene cube --size "${size}x${size}" --rays 65536 --quiet \
+        "$hmdist" render --scene cube --size "${size}x${size}" --rays 65536 --sampler grid --quiet \
             --out "$out/$name.exr" "$@" >&2
         echo "$name: $((SECONDS - start)) s" >&2
     fi

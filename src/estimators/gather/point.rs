@@ -9,6 +9,10 @@ use crate::estimators::{AovSample, DistanceClamp, HarmonicMean, Tally};
 use crate::progress::Progress;
 use crate::sampling::{Progressive, Sampler, Stream, Weighting};
 
+/// The largest progressive round cast as one net ([`PointGather::round_counted`]): its
+/// directions, distances and order held at once, 1.5 MB a thread.
+const LARGEST_NET: u32 = 1 << 16;
+
 /// One point's gather so far, round by round: H, its error bar and the AOVs.
 pub(crate) struct PointGather {
     pub(super) weighting: Weighting,
@@ -99,9 +103,11 @@ impl PointGather {
         let round = (self.sequence_rounds, self.rounds);
         let mut directions = sampler_directions(self.sampler, self.weighting, (seed, key), round, n);
         // A progressive round of a power of two rays is a net: cast as packets of the 8
-        // points of each of its elementary boxes (neighbouring directions), in one span.
+        // points of each of its elementary boxes (neighbouring directions), in one span. Up
+        // to `LARGEST_NET` rays: a larger round is cast in spans in ray order (the same
+        // distances, so the same H), which keeps its memory small and polls the interrupt.
         let part = self.sequence_rounds.part(self.rounds, n);
-        let net = (self.sampler == Sampler::Sobol && Progressive::is_net(n))
+        let net = (self.sampler == Sampler::Sobol && Progressive::is_net(n) && n <= LARGEST_NET)
             .then(|| Progressive::new(Stream::new(seed, key), part.replicate));
         let mut inverse_sum = 0.0f64;
         let poll = crate::interrupt::POLL_RAYS as u64;
