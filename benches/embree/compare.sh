@@ -5,6 +5,7 @@
 #
 #   benches/embree/compare.sh [CASES] [RUNS]                 # pure casting
 #   benches/embree/compare.sh --end-to-end [CASES] [RUNS]    # the whole gather
+#   benches/embree/compare.sh --accuracy [SCENES] [SIDE] [RUNS]   # seconds to an f_diff
 #
 # CASES: space-separated SCENE:SIDE:N (default "cube:256:256 cube:64:4096 hall:256:256
 # sphere5m:256:64"; end to end: "cube:256:256 cube:64:4096 hall:256:256"); SCENE is a
@@ -27,25 +28,51 @@
 # (the batched variants' generation also apart, gen_s). Medians of RUNS interleaved runs;
 # ratio above 1: hmdist is faster; the summary's last lines compare against the fastest
 # Embree variant of each build. Timings drift ±10 %: compare within one run.
+#
+# Accuracy: the seconds each side needs for an image of a given f_diff, what a user waits
+# for. SCENES default "cube hall columns" (columns: benches/scenes/columns.py, a closed
+# room), SIDE² pixels (default 256). Per scene one shared reference (`hmdist render
+# --sampler grid --rays 16384`, its own seed); then for N = 16 … 2,048 rays, RUNS times
+# (default 3), interleaved: Embree (embree_gather.c: hmdist's jittered grid of strata, what a
+# hand-written gather casts; the fast build, each EMBREE_CASTS variant, default "4 8 16", the
+# fastest end to end; the fastest variant's median seconds), and hmdist with its defaults
+# (`render --rays N`, sobol); then hmdist's adaptive gathering (the stop that gives the least
+# f_diff per ray: `--tolerance 0 --abs-tolerance A --loosen 1`, A = 0.004 … 0.00025). Seconds
+# are the gather's (Embree's gather_s, hmdist's seconds.estimate), after the BVH and the
+# primary hits, which each pays once. For T = Embree's f_diff at 64, 256 and 1,024 rays: each
+# side's seconds to f_diff ≤ T (log-log between the points measured) and hmdist's as a
+# fraction of Embree's.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 mode=cast
 if [ "${1:-}" = --end-to-end ]; then
     mode=e2e
     shift
+elif [ "${1:-}" = --accuracy ]; then
+    mode=accuracy
+    shift
 fi
 root="$(cd "$here/../.." && pwd)"
 if [ "$mode" = e2e ]; then
     cases="${1:-cube:256:256 cube:64:4096 hall:256:256}"
+elif [ "$mode" = accuracy ]; then
+    cases="${1:-cube hall columns}"
+    shift || true
 else
     cases="${1:-cube:256:256 cube:64:4096 hall:256:256 sphere5m:256:64}"
 fi
-runs="${2:-5}"
+if [ "$mode" = accuracy ]; then
+    side="${1:-256}"
+    runs="${2:-3}"
+else
+    runs="${2:-5}"
+fi
 # End to end: how embree_gather casts (EMBREE_CASTS): `loop` makes each ray inside the cast
 # loop; the others make every ray first on all threads, then cast them one at a time (1), as
 # packets (4, 8, 16) or as streams (stream). Every variant runs with the robust and the fast
 # build; the summary names the fastest of each build.
 casts="${EMBREE_CASTS:-loop 1 4 8 16 stream}"
+[ "$mode" = accuracy ] && casts="${EMBREE_CASTS:-4 8 16}"
 threads="$(nproc)"
 work="${HMDIST_COMPARE_DIR:-$(mktemp -d)}"
 mkdir -p "$work"
@@ -66,6 +93,55 @@ fi
 (cd "$root" && cargo build --release -q --example gather_rays --bin hmdist)
 hmdist="$root/target/release/hmdist"
 gather_rays="$root/target/release/examples/gather_rays"
+
+if [ "$mode" = accuracy ]; then
+    f_diff() { "$hmdist" diff "$1" "$2" --scene "$3" | awk '/^f_diff:/ { print $2 }'; }
+    for scene in $cases; do
+        name="$(basename "$scene")"
+        if [ "$scene" = columns ]; then
+            scene="$(python3 "$here/../scenes/columns.py" "$work/columns")"
+        fi
+        points="$work/$name-$side.hmdp"
+        obj="$work/$name.obj"
+        reference="$work/$name-$side-reference.exr"
+        [ -f "$points" ] || "$gather_rays" points "$scene" "$side" "$points"
+        [ -f "$obj" ] || "$hmdist" scene export "$scene" "$obj" >/dev/null
+        [ -f "$reference" ] || "$hmdist" render --quiet --scene "$scene" --size "${side}x$side" \
+            --rays 16384 --sampler grid --seed 1000003 --out "$reference" >/dev/null
+        log="$work/$name-$side-accuracy.log"
+        : >"$log"
+        for run in $(seq "$runs"); do
+            for n in 16 32 64 128 256 512 1024 2048; do
+                "$hmdist" render --quiet --scene "$scene" --size "${side}x$side" --rays "$n" \
+                    --threads "$threads" --out "$work/h.exr" --json "$work/h.json" >/dev/null
+                seconds="$(python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["seconds"]["estimate"])' "$work/h.json")"
+                error=""
+                [ "$run" = 1 ] && error="f_diff $(f_diff "$reference" "$work/h.exr" "$scene")"
+                echo "hmdist_gather n $n gather_s $seconds $error" >>"$log"
+                for cast in $casts; do
+                    EMBREE_HMD_OUT="$work/e.f32" "$work/embree_gather" "$obj" "$points" "$n" "$threads" fast "$cast" |
+                        awk -v n="$n" '{ $1 = $1 " n " n; print }' >>"$log"
+                done
+                if [ "$run" = 1 ]; then
+                    "$gather_rays" exr "$side" "$points" "$work/e.f32" "$work/e.exr"
+                    echo "embree n $n f_diff $(f_diff "$reference" "$work/e.exr" "$scene")" >>"$log"
+                fi
+            done
+            for a in 0.004 0.002 0.001 0.0005 0.00025; do
+                "$hmdist" render --quiet --scene "$scene" --size "${side}x$side" --method adaptive \
+                    --tolerance 0 --abs-tolerance "$a" --loosen 1 --min-rays 64 --max-rays 8192 \
+                    --threads "$threads" --out "$work/h.exr" --json "$work/h.json" >/dev/null
+                read -r n seconds < <(python3 -c 'import json, sys; d = json.load(open(sys.argv[1]))
+print(round(d["mean_rays_per_pixel"]), d["seconds"]["estimate"])' "$work/h.json")
+                error=""
+                [ "$run" = 1 ] && error="f_diff $(f_diff "$reference" "$work/h.exr" "$scene")"
+                echo "hmdist_adaptive n $n gather_s $seconds $error" >>"$log"
+            done
+        done
+        python3 "$here/accuracy_summary.py" "$log" "$name" "$side" "$threads"
+    done
+    exit 0
+fi
 
 if [ "$mode" = e2e ]; then
     for case in $cases; do

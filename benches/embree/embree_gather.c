@@ -21,7 +21,8 @@
  *         (rtcIntersect1M); sums per pixel in ray order as the loop.
  * Prints one line:
  *   embree_e2e_robust_loop build_s B gen_s G gather_s S mrays_per_s M rays R escaped E mean_inverse I
- * (gather_s includes gen_s). */
+ * (gather_s includes gen_s). With EMBREE_HMD_OUT=FILE set, also writes each point's H there
+ * (little-endian float32, in the points file's order; `gather_rays exr` makes it an EXR). */
 #include "embree_scene.h"
 #include <math.h>
 #include <pthread.h>
@@ -286,6 +287,16 @@ int main(int argc, char **argv) {
     }
     double seconds = now() - start;
     double rays = (double)point_count * rays_per_point;
+    const char *hmd_out = getenv("EMBREE_HMD_OUT");
+    if (hmd_out) {
+        FILE *out = fopen(hmd_out, "wb");
+        if (!out) { perror(hmd_out); return 2; }
+        for (uint32_t p = 0; p < point_count; p++) {
+            float h = (float)hmd[p];
+            fwrite(&h, sizeof h, 1, out);
+        }
+        if (fclose(out)) { perror(hmd_out); return 2; }
+    }
     printf("embree_e2e_%s_%s build_s %.3f gen_s %.3f gather_s %.3f mrays_per_s %.3f rays %.0f escaped %llu mean_inverse %.6f\n",
            robust ? "robust" : "fast", mode, build, generation, seconds, rays / seconds / 1e6, rays,
            (unsigned long long)escaped, inverse_sum / rays);

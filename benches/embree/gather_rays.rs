@@ -11,6 +11,8 @@
 //! gather_rays stats SCENE FILE          # nodes and leaf blocks per ray of each mode
 //! gather_rays points SCENE SIDE FILE    # the SIDE² image's gather points, for the
 //!                                       # end-to-end peer (embree_gather.c)
+//! gather_rays exr SIDE POINTS HMD OUT   # the peer's H (HMD: f32 per point, in the points
+//!                                       # file's order) as a SIDE² EXR, NaN where no point
 //! ```
 //!
 //! Modes of `order` (how packets were chosen; the distances are the same bits in all):
@@ -51,9 +53,10 @@ fn main() {
         ["points", scene, side, file] => points(scene, side.parse().unwrap(), file),
         ["order", scene, file, mode, group] => order(scene, file, mode, group.parse().unwrap()),
         ["sphere", level, dir] => sphere(level.parse().unwrap(), std::path::Path::new(dir)),
+        ["exr", side, points, hmd, out] => exr(side.parse().unwrap(), points, hmd, out),
         _ => {
             eprintln!(
-                "usage: gather_rays write SCENE SIDE N FILE | cast SCENE FILE [auto|fast|high] | sphere LEVEL DIR | order SCENE FILE MODE G | stats SCENE FILE | points SCENE SIDE FILE"
+                "usage: gather_rays write SCENE SIDE N FILE | cast SCENE FILE [auto|fast|high] | sphere LEVEL DIR | order SCENE FILE MODE G | stats SCENE FILE | points SCENE SIDE FILE | exr SIDE POINTS HMD OUT"
             );
             std::process::exit(2);
         }
@@ -115,6 +118,24 @@ fn points(name: &str, side: u32, file: &str) {
         out.write_all(&(pixel as u32).to_le_bytes()).unwrap();
     }
     out.flush().unwrap();
+}
+
+/// A peer's H per point (`hmd`: little-endian f32 in the order of `points`, a points file)
+/// as a `side²` EXR for `hmdist diff`: each value at its point's pixel, NaN elsewhere.
+fn exr(side: u32, points: &str, hmd: &str, out: &str) {
+    let bytes = std::fs::read(points).expect("a points file");
+    assert_eq!(&bytes[..4], b"HMDP");
+    let values = std::fs::read(hmd).expect("an H file");
+    let word = |b: &[u8], at: usize| u32::from_le_bytes(b[at..at + 4].try_into().unwrap());
+    let count = word(&bytes, 8) as usize;
+    assert_eq!(values.len(), 4 * count, "one f32 per point");
+    let mut data = vec![f32::NAN; (side * side) as usize];
+    for i in 0..count {
+        let pixel = word(&bytes, 12 + 28 * i + 24) as usize;
+        data[pixel] = f32::from_le_bytes(values[4 * i..4 * i + 4].try_into().unwrap());
+    }
+    let image = hmdist::image::HmdImage::new(side, side, data);
+    hmdist::image::exr::write(&image, std::path::Path::new(out)).expect("a writable EXR");
 }
 
 fn sphere(level: u32, dir: &std::path::Path) {
