@@ -96,6 +96,18 @@ gather_rays="$root/target/release/examples/gather_rays"
 
 if [ "$mode" = accuracy ]; then
     f_diff() { "$hmdist" diff "$1" "$2" --scene "$3" | awk '/^f_diff:/ { print $2 }'; }
+    # One hmdist image of the scene into the log as NAME: its rays per pixel (the mean, for
+    # adaptive), its gather seconds and, in the first run, its f_diff.
+    hmdist_point() { # NAME RENDER-FLAGS...
+        local name="$1" n seconds error=""
+        shift
+        "$hmdist" render --quiet --scene "$scene" --size "${side}x$side" --threads "$threads" "$@" \
+            --out "$work/h.exr" --json "$work/h.json" >/dev/null
+        read -r n seconds < <(python3 -c 'import json, sys; d = json.load(open(sys.argv[1]))
+print(round(d.get("mean_rays_per_pixel") or d["rays"]), d["seconds"]["estimate"])' "$work/h.json")
+        [ "$run" = 1 ] && error="f_diff $(f_diff "$reference" "$work/h.exr" "$scene")"
+        echo "$name n $n gather_s $seconds $error" >>"$log"
+    }
     for scene in $cases; do
         name="$(basename "$scene")"
         if [ "$scene" = columns ]; then
@@ -112,12 +124,7 @@ if [ "$mode" = accuracy ]; then
         : >"$log"
         for run in $(seq "$runs"); do
             for n in 16 32 64 128 256 512 1024 2048; do
-                "$hmdist" render --quiet --scene "$scene" --size "${side}x$side" --rays "$n" \
-                    --threads "$threads" --out "$work/h.exr" --json "$work/h.json" >/dev/null
-                seconds="$(python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["seconds"]["estimate"])' "$work/h.json")"
-                error=""
-                [ "$run" = 1 ] && error="f_diff $(f_diff "$reference" "$work/h.exr" "$scene")"
-                echo "hmdist_gather n $n gather_s $seconds $error" >>"$log"
+                hmdist_point hmdist_gather --rays "$n"
                 for cast in $casts; do
                     EMBREE_HMD_OUT="$work/e.f32" "$work/embree_gather" "$obj" "$points" "$n" "$threads" fast "$cast" |
                         awk -v n="$n" '{ $1 = $1 " n " n; print }' >>"$log"
@@ -128,14 +135,8 @@ if [ "$mode" = accuracy ]; then
                 fi
             done
             for a in 0.004 0.002 0.001 0.0005 0.00025; do
-                "$hmdist" render --quiet --scene "$scene" --size "${side}x$side" --method adaptive \
-                    --tolerance 0 --abs-tolerance "$a" --loosen 1 --min-rays 64 --max-rays 8192 \
-                    --threads "$threads" --out "$work/h.exr" --json "$work/h.json" >/dev/null
-                read -r n seconds < <(python3 -c 'import json, sys; d = json.load(open(sys.argv[1]))
-print(round(d["mean_rays_per_pixel"]), d["seconds"]["estimate"])' "$work/h.json")
-                error=""
-                [ "$run" = 1 ] && error="f_diff $(f_diff "$reference" "$work/h.exr" "$scene")"
-                echo "hmdist_adaptive n $n gather_s $seconds $error" >>"$log"
+                hmdist_point hmdist_adaptive --method adaptive --tolerance 0 --abs-tolerance "$a" \
+                    --loosen 1 --min-rays 64 --max-rays 8192
             done
         done
         python3 "$here/accuracy_summary.py" "$log" "$name" "$side" "$threads"

@@ -59,6 +59,14 @@ typedef struct {
     double inverse_sum;
 } Tally;
 
+/* The next 16 points for this thread, [first, last); 0 once every point is taken. */
+static inline int next_batch(uint32_t *first, uint32_t *last) {
+    *first = atomic_fetch_add(&next_point, 16);
+    if (*first >= point_count) return 0;
+    *last = *first + 16 < point_count ? *first + 16 : point_count;
+    return 1;
+}
+
 /* The pixel's frame (Duff et al. 2017): tangent t, bitangent b. */
 static inline void frame_of(const float *n, float t[3], float b[3]) {
     float sign = copysignf(1.0f, n[2]);
@@ -101,10 +109,7 @@ static void *gather(void *arg) {
     struct RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     const uint64_t key = mix64(1 ^ 0x9E3779B97F4A7C15ull); /* seed 1 */
-    for (;;) {
-        uint32_t first = atomic_fetch_add(&next_point, 16);
-        if (first >= point_count) break;
-        uint32_t last = first + 16 < point_count ? first + 16 : point_count;
+    for (uint32_t first, last; next_batch(&first, &last);) {
         for (uint32_t p = first; p < last; p++) {
             const Point *pt = &points[p];
             const float *n = pt->normal;
@@ -137,10 +142,7 @@ static int cast_width; /* 1, 4, 8, 16, or 0 for rtcIntersect1M streams of 64 */
 static void *generate(void *arg) {
     (void)arg;
     const uint64_t key = mix64(1 ^ 0x9E3779B97F4A7C15ull); /* seed 1 */
-    for (;;) {
-        uint32_t first = atomic_fetch_add(&next_point, 16);
-        if (first >= point_count) break;
-        uint32_t last = first + 16 < point_count ? first + 16 : point_count;
+    for (uint32_t first, last; next_batch(&first, &last);) {
         for (uint32_t p = first; p < last; p++) {
             const float *n = points[p].normal;
             float t[3], b[3];
@@ -184,10 +186,7 @@ static void *cast(void *arg) {
     struct RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     struct RTCRayHit stream[64];
-    for (;;) {
-        uint32_t first = atomic_fetch_add(&next_point, 16);
-        if (first >= point_count) break;
-        uint32_t last = first + 16 < point_count ? first + 16 : point_count;
+    for (uint32_t first, last; next_batch(&first, &last);) {
         for (uint32_t p = first; p < last; p++) {
             const float *o = points[p].origin;
             const float *d = dirs + (size_t)p * rays_per_point * 3;

@@ -107,7 +107,7 @@ def study(name, scene, size):
         print(f"  {label:42} {cast:7.1f} rays: f_diff {f:.4f} (x{rays_for(mean_curve, f) / cast:.2f}), "
               f"p95 {p:.4f} (x{rays_for(p95_curve, p) / cast:.2f})", flush=True)
 
-    for budget, image, cast in measured_oracle(lambda **p: render(**p), reference, BUDGETS):
+    for budget, image, cast in measured_oracle(render, reference, BUDGETS):
         line(f"measured oracle, N={budget}", image, cast)
     for label, params, knob, values in STOPS:
         for value in values:

@@ -253,31 +253,32 @@ fn closeups(
 ) -> Result<Vec<String>> {
     let size = runner.params.size;
     let side = (size / 8).max(16).min(size);
-    let (windows, chosen) = match fine_parts(&runner.scene.name) {
+    let (windows, chosen): (Vec<(&str, (u32, u32))>, _) = match fine_parts(&runner.scene.name) {
         Some(parts) => {
             let corner = |f: f64| ((f * size as f64) as u32).min(size - side);
-            let windows = parts.map(|(name, x, y)| (name.to_string(), (corner(x), corner(y))));
+            let windows = parts.map(|(name, x, y)| (name, (corner(x), corner(y))));
             (windows.to_vec(), "chosen by hand on the scene's fine parts")
         }
         None => {
             let found = windows_differing_most(&images[0], &images[1], side, CROPS);
-            let windows = found.into_iter().map(|at| (String::new(), at)).collect();
+            let windows = found.into_iter().map(|at| ("", at)).collect();
             (windows, "where methods I and II differ most")
         }
     };
+    // Each image's picture once, then its windows cut from it.
     let s = runner.scene.display_scale;
+    let pictures = [
+        ("reference", grey(reference, s)),
+        ("photon1", grey(&images[0], s)),
+        ("photon2", grey(&images[1], s)),
+    ];
     let crops: Vec<Option<Tile>> = windows
         .iter()
-        .flat_map(|(part, (x, y))| {
-            [
-                ("reference", reference),
-                ("photon1", &images[0]),
-                ("photon2", &images[1]),
-            ]
-            .map(|(name, image)| {
+        .flat_map(|&(part, at)| {
+            pictures.iter().map(move |(name, picture)| {
                 Some(Tile {
                     caption: format!("{name} {part}"),
-                    picture: crop(&grey(image, s), (*x, *y), side, 2),
+                    picture: crop(picture, at, side, 2),
                 })
             })
         })
@@ -522,11 +523,7 @@ fn table4_paper() -> Table {
 
 /// `table4.svg`: the build seconds against photons, each source beside the paper's in its
 /// colour.
-fn table4_plot(
-    runner: &Runner,
-    sources: &[(&str, PhotonSource)],
-    series: &[Series],
-) -> Result<std::path::PathBuf> {
+fn table4_plot(runner: &Runner, sources: &[(&str, PhotonSource)], series: &[Series]) -> Result<PathBuf> {
     let plot = runner.out.join("table4.svg");
     // The paper's build seconds, each source beside ours in its colour.
     let paper_series: Vec<Series> = sources

@@ -145,7 +145,6 @@ fn estimate_by_rays_on_gpu(
     let gather = &cubemap.gather;
     let job = GatherJob {
         cube_res: cubemap.hemicube.resolution,
-        sampler: crate::sampling::Sampler::Grid,
         ..gather.gpu_job(context.seed, context.clamp, None)
     };
     let done = gather_points(
