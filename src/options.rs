@@ -24,11 +24,25 @@ pub enum Aov {
     Ao,
     /// Fraction of rays that met nothing.
     Escaped,
+    /// Direct irradiance from the spot light at the pixel's point (`irradiance` only).
+    #[serde(rename = "E_direct")]
+    #[cfg_attr(feature = "cli", value(name = "E_direct"))]
+    EDirect,
 }
 
 impl Aov {
     /// Every AOV, in channel order.
-    pub const ALL: [Aov; 5] = [Aov::Relerr, Aov::Rays, Aov::Dmin, Aov::Ao, Aov::Escaped];
+    pub const ALL: [Aov; 6] = [
+        Aov::Relerr,
+        Aov::Rays,
+        Aov::Dmin,
+        Aov::Ao,
+        Aov::Escaped,
+        Aov::EDirect,
+    ];
+
+    /// The AOVs of H that the gather measures (and `adaptive`): all but `E_direct`.
+    pub const OF_GATHER: [Aov; 5] = [Aov::Relerr, Aov::Rays, Aov::Dmin, Aov::Ao, Aov::Escaped];
 
     /// The EXR channel's name.
     pub fn name(self) -> &'static str {
@@ -38,6 +52,7 @@ impl Aov {
             Aov::Dmin => "dmin",
             Aov::Ao => "ao",
             Aov::Escaped => "escaped",
+            Aov::EDirect => "E_direct",
         }
     }
 

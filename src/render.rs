@@ -217,7 +217,7 @@ fn output(
             total: setup.seconds + estimate_seconds,
             phases: estimate.phases,
         },
-        channels: std::iter::once("Y")
+        channels: std::iter::once(estimator.channel())
             .chain(options.aovs.iter().map(|a| a.name()))
             .map(String::from)
             .collect(),

@@ -30,6 +30,20 @@ fn four_shards_merged_in_any_order_give_the_one_machine_exr_byte_for_byte() {
             "gather",
             vec!["--size", "40x27", "--rays", "16", "--aov", "rays,dmin"],
         ),
+        // Not H: its channel is E, which merge must read and write as E.
+        (
+            "irradiance",
+            vec![
+                "--size",
+                "40x27",
+                "--method",
+                "irradiance",
+                "--rays",
+                "16",
+                "--aov",
+                "E_direct",
+            ],
+        ),
         (
             "photon2",
             vec![

@@ -184,10 +184,10 @@ class Scene:
         camera's, else 1024 × 1024) sets the image's size. `params` are `hmdist render`'s flags
         with underscores: the render's own (size, seed, threads, max_distance, bvh) and the
         method's (gather: rays, weighting, rounds, ao_radius, backend; cubemap: cube_res, ...;
-        photon1/photon2: photons, nearest (or its older name gather), source, photon_map, ...).
-        A name the method does not read is a ValueError. With `aov` (names: relerr, rays, dmin,
-        ao, escaped) a third value is returned: a dict of float32 [height, width] arrays by
-        name.
+        photon1/photon2: photons, nearest (or its older name gather), source, photon_map, ...;
+        irradiance: see `irradiance`). A name the method does not read is a ValueError. With
+        `aov` (names: relerr, rays, dmin, ao, escaped; E_direct for irradiance) a third value
+        is returned: a dict of float32 [height, width] arrays by name.
 
         Ctrl-C stops the render within a fraction of a second and raises KeyboardInterrupt;
         the scene stays usable."""
@@ -199,6 +199,15 @@ class Scene:
         names = [] if aov is None else ([aov] if isinstance(aov, str) else [str(a) for a in aov])
         image, report, aovs = self._inner.render(camera, method, params, bool(progress), names)
         return (image, report) if aov is None else (image, report, aovs)
+
+    def irradiance(self, camera: Camera | None = None, *, progress: bool = False,
+                   aov: str | Iterable[str] | None = None, **params: Any) -> Any:
+        """One-bounce indirect irradiance E per pixel (float32 [height, width]) from the
+        scene's spot light, and the report: `render(camera, "irradiance", ...)`. Its `params`
+        are gather's rays, weighting and sampler, the surfaces' absorption (reflectance 1 −
+        absorption, 0.2 by default) and the render's own; `aov="E_direct"` adds the direct
+        irradiance at each pixel's point. A scene without a spot light is a ValueError."""
+        return self.render(camera, "irradiance", progress=progress, aov=aov, **params)
 
     def primary_hits(self, camera: Camera | None = None, size: Any = None) -> dict[str, npt.NDArray[Any]]:
         """Each pixel's first hit, row-major: a dict of `points`, `normals` (facing the

@@ -61,6 +61,20 @@ def test_render_equals_the_clis_exr_bit_for_bit(tmp_path: Path, method: str, arg
     assert report["width"] == 40 and report["height"] == 30 and report["seed"] == 5
 
 
+@needs_cli
+def test_irradiance_equals_the_clis_exr_and_needs_a_light(tmp_path: Path) -> None:
+    exr = tmp_path / "e.exr"
+    subprocess.run([CLI, "render", "--quiet", "--method", "irradiance", "--size", "24x18", "--rays", "16",
+                    "--aov", "E_direct", "--out", str(exr)], check=True)
+    E, report, aovs = hmdist.Scene.builtin("cube").irradiance(size=(24, 18), rays=16, aov="E_direct")
+    assert report["method"] == "irradiance" and report["channels"] == ["E", "E_direct"]
+    assert np.array_equal(hmdist.read_exr(exr, "E").view(np.uint32), E.view(np.uint32))
+    assert np.array_equal(hmdist.read_exr(exr, "E_direct").view(np.uint32), aovs["E_direct"].view(np.uint32))
+    assert np.all(E >= 0) and np.any(E > 0)
+    with pytest.raises(ValueError, match="has none"):
+        hmdist.Scene.builtin("slab").irradiance(size=(4, 4), rays=4)
+
+
 def test_hmd_at_on_an_images_own_hits_keyed_by_pixel_equals_the_image() -> None:
     s = hmdist.Scene.builtin("cube")
     cam = hmdist.Camera((0.3, 4.3, 4.7), (0.0, 1.6, -1.6), fov_y_deg=60, size=(32, 24))

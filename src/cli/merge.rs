@@ -33,8 +33,11 @@ pub struct MergeArgs {
 fn read_part(path: &std::path::Path) -> Result<Part> {
     let json = path.with_extension("json");
     let report = RenderReport::read(&json)?;
-    let image = exr::read(path)?;
-    // Channel 0 is Y, H itself.
+    let image = match report.channels.first() {
+        Some(channel) => exr::read_channel(path, channel)?,
+        None => exr::read(path)?,
+    };
+    // Channel 0 is the image itself: Y, H (or E, irradiance).
     let aovs = report
         .channels
         .iter()
@@ -69,7 +72,12 @@ pub fn run(args: MergeArgs) -> Result<()> {
         .map(|p| read_part(p))
         .collect::<Result<Vec<_>>>()?;
     let merged = merge(parts)?;
-    let exr_bytes = exr::encode(&merged.image, &merged.aovs, &args.out)?;
+    let channel = merged
+        .report
+        .channels
+        .first()
+        .map_or(exr::CHANNEL, String::as_str);
+    let exr_bytes = exr::encode_as(channel, &merged.image, &merged.aovs, &args.out)?;
     let grey = picture::grey(&merged.image, merged.report.display_scale);
     let png_bytes = picture::encode_png(&grey, &png)?;
     outputs.commit(&[&exr_bytes, &png_bytes, merged.report.to_json().as_bytes()])?;

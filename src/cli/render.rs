@@ -33,21 +33,24 @@ pub struct RenderArgs {
     /// Clamp distances at D; escaping rays then count as D [default: no clamp].
     #[arg(long, value_name = "D")]
     max_distance: Option<f32>,
-    /// EXR output: one float32 channel Y with H per pixel, NaN for background.
+    /// EXR output: one float32 channel Y with H per pixel (E, irradiance, with --method
+    /// irradiance), NaN for background.
     #[arg(long, default_value = "hmd.exr")]
     out: PathBuf,
-    /// PNG output, grey = clamp(scale * H) [default: the EXR path with .png].
+    /// PNG output, grey = clamp(scale * H) (or E) [default: the EXR path with .png].
     #[arg(long)]
     png: Option<PathBuf>,
     /// JSON sidecar: parameters, scene statistics, timings [default: the EXR path with .json].
     #[arg(long)]
     json: Option<PathBuf>,
-    /// Display scale s of the PNG [default: the scene's own].
+    /// Display scale s of the PNG: its exposure [default: the scene's own; for irradiance,
+    /// l_diag²/1.6].
     #[arg(long)]
     scale: Option<f32>,
     /// AOVs to add as EXR channels beside Y, comma-separated: relerr (relative standard error
     /// of H), rays (rays cast), dmin (smallest hit distance), ao (ambient occlusion within
-    /// --ao-radius), escaped (fraction of rays that escaped).
+    /// --ao-radius), escaped (fraction of rays that escaped); with --method irradiance,
+    /// E_direct (direct irradiance from the light).
     #[arg(
         long,
         value_enum,
@@ -171,9 +174,14 @@ pub fn run(args: RenderArgs) -> Result<()> {
     rendered.report.add_load_seconds(load_seconds);
 
     // The JSON records the PNG's scale, so that `merge` draws the merged PNG the same way.
-    let scale = args.scale.unwrap_or(scene.display_scale);
+    let channel = estimator.channel();
+    let scale = args.scale.unwrap_or(if channel == exr::IRRADIANCE_CHANNEL {
+        hmdist::estimators::irradiance::display_scale(rendered.report.l_diag)
+    } else {
+        scene.display_scale
+    });
     rendered.report.display_scale = scale;
-    let exr_bytes = exr::encode(&rendered.image, &rendered.aovs, &args.out)?;
+    let exr_bytes = exr::encode_as(channel, &rendered.image, &rendered.aovs, &args.out)?;
     let png_bytes = picture::encode_png(&picture::grey(&rendered.image, scale), &png)?;
     let mut contents = vec![exr_bytes, png_bytes, rendered.report.to_json().into_bytes()];
     for (aov, path) in &pictures {

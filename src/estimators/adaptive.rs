@@ -255,7 +255,7 @@ impl Estimator for Adaptive {
     }
 
     fn aovs(&self) -> &'static [Aov] {
-        &Aov::ALL
+        &Aov::OF_GATHER
     }
 
     fn expected_rays(&self, pixels: u64) -> u64 {

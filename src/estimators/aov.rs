@@ -6,7 +6,9 @@
 //! - `dmin`: the smallest hit distance over the pixel's rays (`+inf` if all escaped);
 //! - `ao`: ambient occlusion, the cosine-weighted fraction of directions that meet nothing
 //!   within the AO radius;
-//! - `escaped`: the fraction of rays that met nothing.
+//! - `escaped`: the fraction of rays that met nothing;
+//! - `E_direct` (`irradiance` only): the direct irradiance from the spot light at the pixel's
+//!   point.
 
 pub use crate::options::Aov;
 
@@ -23,6 +25,8 @@ pub struct AovSample {
     pub ao: f32,
     /// Fraction of rays that escaped.
     pub escaped: f32,
+    /// Direct irradiance.
+    pub e_direct: f32,
 }
 
 impl Default for AovSample {
@@ -33,6 +37,7 @@ impl Default for AovSample {
             dmin: f32::NAN,
             ao: f32::NAN,
             escaped: f32::NAN,
+            e_direct: f32::NAN,
         }
     }
 }
@@ -46,6 +51,7 @@ impl AovSample {
             Aov::Dmin => self.dmin,
             Aov::Ao => self.ao,
             Aov::Escaped => self.escaped,
+            Aov::EDirect => self.e_direct,
         }
     }
 }

@@ -18,6 +18,9 @@
 //! [`registry::METHODS`]; the CLI's `--method` and flags, Python's keywords, the experiments
 //! and the report pick it up from there.
 //!
+//! One method computes something other than H with the same machinery: `irradiance`, the
+//! one-bounce irradiance an irradiance cache stores ([`Estimator::channel`] names its image).
+//!
 //! Conventions: distances in scene units; a pixel's normal faces the camera (surfaces are
 //! two-sided); H is `+inf` where every sample escaped and NaN for background pixels and holes.
 
@@ -26,6 +29,7 @@ pub mod aov;
 pub mod cubemap;
 pub mod gather;
 mod harmonic;
+pub mod irradiance;
 pub mod params;
 pub mod pass;
 pub mod photon;
@@ -37,6 +41,7 @@ pub use aov::{Aov, AovImage, AovSample};
 pub use cubemap::{Cubemap, CubemapParams};
 pub use gather::{Gather, GatherParams};
 pub use harmonic::{DistanceClamp, HarmonicMean};
+pub use irradiance::{Irradiance, IrradianceParams};
 pub use photon::{PhotonEstimator, PhotonParams};
 pub use registry::{MethodEntry, MethodParams, METHODS};
 
@@ -44,6 +49,9 @@ use crate::accel::{Accel, Hit};
 use crate::error::Result;
 use crate::progress::Progress;
 use crate::report::{Details, Parameters, PhaseSeconds};
+
+/// The EXR channel of an image of H (SPEC §7).
+pub const HMD_CHANNEL: &str = "Y";
 
 /// Each pixel's first surface hit, normal flipped to face the camera; `None` for background.
 pub struct GBuffer {
@@ -230,6 +238,12 @@ pub trait Estimator: Sync {
 
     /// The method's parameters, for the report.
     fn parameters(&self) -> Parameters;
+
+    /// The name of the image's EXR channel: `Y` for H (SPEC §7); `E` for `irradiance`, whose
+    /// image is irradiance, not H.
+    fn channel(&self) -> &'static str {
+        HMD_CHANNEL
+    }
 
     /// The AOVs it can measure; asking for another is refused before the render.
     fn aovs(&self) -> &'static [Aov] {

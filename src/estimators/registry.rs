@@ -15,6 +15,7 @@ use super::adaptive::AdaptiveParams;
 use super::aov::Aov;
 use super::cubemap::CubemapParams;
 use super::gather::GatherParams;
+use super::irradiance::IrradianceParams;
 pub use super::params::{Flags, MethodParams};
 use super::photon::{PhotonEstimator, PhotonMethod, PhotonParams};
 use super::Estimator;
@@ -86,6 +87,11 @@ pub const METHODS: &[MethodEntry] = &[
         "photon2",
         "Photon map, method II: distances from the pixel to the photons' next hits (SPEC §3.3)",
         |p: PhotonParams| Ok(Box::new(PhotonEstimator::new(PhotonMethod::NextHitPoint, p)?))
+    ),
+    method!(
+        "irradiance",
+        "Not H: one-bounce indirect irradiance from the scene's spot light, gathered with --rays rays (channel E)",
+        |p: IrradianceParams| Ok(Box::new(p.build()?))
     ),
 ];
 

@@ -1,5 +1,6 @@
 //! OpenEXR files with a float32 channel `Y` holding H per pixel (SPEC §7), and one float32
-//! channel per AOV beside it, named as the AOV (SPEC §8).
+//! channel per AOV beside it, named as the AOV (SPEC §8). An irradiance image
+//! (`--method irradiance`) names its channel `E` instead of `Y`.
 
 use std::io::Cursor;
 use std::path::Path;
@@ -11,26 +12,44 @@ use crate::error::{catch_file_panic, Error as HmdError, Result};
 use crate::estimators::AovImage;
 use crate::options::MAX_PIXELS;
 
-/// The channel name every hmdist EXR uses.
-pub const CHANNEL: &str = "Y";
+/// The channel name every hmdist EXR of H uses, `Y`.
+pub use crate::estimators::HMD_CHANNEL as CHANNEL;
+
+/// The channel an image of irradiance uses instead of [`CHANNEL`], `E`.
+pub use crate::estimators::irradiance::CHANNEL as IRRADIANCE_CHANNEL;
 
 /// Writes `image` to the EXR file `path`, through a temporary file and a rename.
 pub fn write(image: &HmdImage, path: &Path) -> Result<()> {
     write_atomically(path, &encode(image, &[], path)?)
 }
 
-/// The bytes of the EXR file of `image` and its `aovs`; `path` names the file in errors.
+/// The bytes of the EXR file of `image` (H, channel `Y`) and its `aovs`; `path` names the
+/// file in errors.
 pub fn encode(image: &HmdImage, aovs: &[AovImage], path: &Path) -> Result<Vec<u8>> {
-    let mut channels = SmallVec::new();
-    channels.push(AnyChannel::new(CHANNEL, FlatSamples::F32(image.data.clone())));
-    for aov in aovs {
-        channels.push(AnyChannel::new(
-            aov.aov.name(),
-            FlatSamples::F32(aov.data.clone()),
-        ));
-    }
+    encode_as(CHANNEL, image, aovs, path)
+}
+
+/// [`encode`] with the image's channel named `channel` (an estimator's
+/// [`crate::estimators::Estimator::channel`]).
+pub fn encode_as(channel: &str, image: &HmdImage, aovs: &[AovImage], path: &Path) -> Result<Vec<u8>> {
+    let mut channels: Vec<(&str, &[f32])> = vec![(channel, &image.data)];
+    channels.extend(aovs.iter().map(|aov| (aov.aov.name(), &aov.data[..])));
+    encode_channels(&channels, (image.width, image.height), path)
+}
+
+/// The bytes of an EXR file of float32 channels `(name, values)` over `width × height`
+/// pixels (row-major, row 0 at the top); `path` names the file in errors.
+pub fn encode_channels(
+    channels: &[(&str, &[f32])],
+    (width, height): (u32, u32),
+    path: &Path,
+) -> Result<Vec<u8>> {
+    let channels: SmallVec<_> = channels
+        .iter()
+        .map(|(name, values)| AnyChannel::new(*name, FlatSamples::F32(values.to_vec())))
+        .collect();
     let layer = Layer::new(
-        (image.width as usize, image.height as usize),
+        (width as usize, height as usize),
         LayerAttributes::named("hmd"),
         // Scan lines in increasing order: the file's bytes depend only on the pixels, not on
         // which compression thread finished first (exr's default order is unspecified).
@@ -55,7 +74,7 @@ pub fn read_channel(path: &Path, name: &str) -> Result<HmdImage> {
 }
 
 /// Reads an EXR written by hmdist (or any EXR whose first layer has a `Y` channel, or a
-/// single channel).
+/// single channel): its `Y`, or its `E` where it has no `Y` (an irradiance image).
 pub fn read(path: &Path) -> Result<HmdImage> {
     read_named(path, CHANNEL, true)
 }
@@ -87,6 +106,12 @@ fn decode_named(bytes: &[u8], path: &Path, name: &str, only_channel_will_do: boo
     let channel = channels
         .iter()
         .find(|c| c.name.eq(name))
+        .or_else(|| {
+            let irradiance = only_channel_will_do && name == CHANNEL;
+            channels
+                .iter()
+                .find(|c| irradiance && c.name.eq(IRRADIANCE_CHANNEL))
+        })
         .or(if only_channel_will_do && channels.len() == 1 {
             channels.first()
         } else {

@@ -71,7 +71,7 @@ pub fn render_args<'a>(extra: &[&'a str]) -> Vec<&'a str> {
     // `--rays` only where the method reads it: another method refuses it.
     let method = extra.windows(2).find(|w| w[0] == "--method").map(|w| w[1]);
     match method {
-        None | Some("gather" | "cubemap") => args.extend_from_slice(&TINY),
+        None | Some("gather" | "cubemap" | "irradiance") => args.extend_from_slice(&TINY),
         Some(_) => args.extend_from_slice(&TINY[..2]),
     }
     args.extend_from_slice(extra);

@@ -364,7 +364,7 @@ impl Estimator for Gather {
     }
 
     fn aovs(&self) -> &'static [Aov] {
-        &Aov::ALL
+        &Aov::OF_GATHER
     }
 
     fn expected_rays(&self, pixels: u64) -> u64 {

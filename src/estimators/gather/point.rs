@@ -272,6 +272,7 @@ impl PointGather {
                 f32::NAN
             },
             escaped: self.escaped as f32 / self.rays.max(1) as f32,
+            e_direct: f32::NAN,
         };
     }
 }
