@@ -62,6 +62,7 @@
 
 pub mod accel;
 pub mod backend;
+pub mod cache;
 pub mod error;
 pub mod estimators;
 #[cfg(feature = "experiments")]

@@ -6,8 +6,9 @@ use std::collections::BTreeSet;
 use std::path::Path;
 
 /// The commands, as their words after `hmdist`.
-const COMMANDS: [&[&str]; 9] = [
+const COMMANDS: [&[&str]; 10] = [
     &["render"],
+    &["cache"],
     &["points"],
     &["merge"],
     &["photons", "build"],

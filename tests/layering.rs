@@ -21,10 +21,11 @@ const FORBIDDEN: &[(&str, &[&str])] = &[
     ("accel", &["estimators", "render", "shard", "experiments", "gpu", "points", "cli"]),
     ("scene", &["estimators", "render", "shard", "experiments", "gpu", "points", "cli"]),
     ("gpu", &["estimators", "render", "shard", "experiments", "points", "cli"]),
-    ("estimators", &["render", "shard", "experiments", "points", "cli"]),
+    ("estimators", &["render", "cache", "shard", "experiments", "points", "cli"]),
     ("report", &["estimators", "render", "shard", "experiments", "cli"]),
     ("options", &["render", "shard", "experiments", "cli"]),
-    ("render", &["shard", "experiments", "cli"]),
+    ("render", &["cache", "shard", "experiments", "cli"]),
+    ("cache", &["shard", "experiments", "cli"]),
 ];
 
 /// Every `.rs` file under `src/` by its module path (`lib.rs` is the root, `main.rs` is

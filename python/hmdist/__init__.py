@@ -209,6 +209,36 @@ class Scene:
         irradiance at each pixel's point. A scene without a spot light is a ValueError."""
         return self.render(camera, "irradiance", progress=progress, aov=aov, **params)
 
+    def cache(self, camera: Camera | None = None, *, progress: bool = False, oracle: npt.ArrayLike | None = None,
+              reference: npt.ArrayLike | None = None, **params: Any) -> Any:
+        """An irradiance cache, as `hmdist cache` builds it: E per pixel (float32 [height,
+        width]), the report (a dict with the JSON's keys) and the records (a dict of arrays:
+        `pixel`, `e`, `radius`, `level`, and per pixel `used` and, with `reference`,
+        `relative_error`). `params`: `accuracy` (Ward's a, 0.2), `spacing` ("hmd",
+        "hmd:METHOD[:NAME=VALUE,...]", "min", "min10", "oracle"), `clamp_pixels` and
+        `clamp_scene` ((lo, hi)), the records' irradiance (rays, weighting, sampler,
+        absorption) and the render's own (size, seed, threads, max_distance, bvh). `oracle`:
+        an image of H for spacing "oracle"; `reference`: an image of E to measure the cache's
+        error against (both float32 [height, width], as `render` and `irradiance` give)."""
+        if camera is not None and not isinstance(camera, Camera):
+            raise ValueError(f"camera must be a hmdist.Camera, not {type(camera).__name__}")
+        params = {name: _parameter(name, value) for name, value in params.items()}
+        if camera is not None and "size" in params:
+            camera = Camera(camera.eye, camera.target, camera.up, camera.fov_y_deg, params.pop("size"))
+        for clamp in ("clamp_pixels", "clamp_scene"):
+            if params.get(clamp) is not None:
+                params[clamp] = tuple(float(v) for v in params[clamp])
+
+        def image(name: str, value: npt.ArrayLike | None) -> npt.NDArray[np.float32] | None:
+            if value is None:
+                return None
+            array = np.ascontiguousarray(value, dtype=np.float32)
+            if array.ndim != 2:
+                raise ValueError(f"{name} must be an image, [height, width], not of shape {array.shape}")
+            return array
+
+        return self._inner.cache(camera, params, bool(progress), image("oracle", oracle), image("reference", reference))
+
     def primary_hits(self, camera: Camera | None = None, size: Any = None) -> dict[str, npt.NDArray[Any]]:
         """Each pixel's first hit, row-major: a dict of `points`, `normals` (facing the
         camera) and `point_errors` (float32 [n, 3]; NaN for background) and `triangles`

@@ -53,6 +53,14 @@ class Scene:
         progress: bool,
         aov: list[str],
     ) -> tuple[npt.NDArray[np.float32], dict[str, Any], dict[str, npt.NDArray[np.float32]]]: ...
+    def cache(
+        self,
+        camera: Optional[Camera],
+        params: dict[str, Any],
+        progress: bool,
+        oracle: Optional[npt.NDArray[np.float32]] = None,
+        reference: Optional[npt.NDArray[np.float32]] = None,
+    ) -> tuple[npt.NDArray[np.float32], dict[str, Any], dict[str, npt.NDArray[Any]]]: ...
     def primary_hits(
         self, camera: Optional[Camera], size: tuple[int, int]
     ) -> dict[str, npt.NDArray[Any]]: ...

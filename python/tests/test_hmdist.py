@@ -75,6 +75,22 @@ def test_irradiance_equals_the_clis_exr_and_needs_a_light(tmp_path: Path) -> Non
         hmdist.Scene.builtin("slab").irradiance(size=(4, 4), rays=4)
 
 
+def test_cache_returns_its_records_and_a_tiny_accuracy_gives_the_irradiance_image() -> None:
+    s = hmdist.Scene.builtin("cube")
+    E, _ = s.irradiance(size=(20, 16), rays=16)
+    C, report, records = s.cache(size=(20, 16), rays=16, accuracy=1e-9, reference=E)
+    assert np.array_equal(C.view(np.uint32), E.view(np.uint32))
+    assert report["records"] == 20 * 16 == len(records["pixel"])
+    assert np.all(records["used"] == 1) and np.all(records["relative_error"] == 0)
+    C, report, records = s.cache(size=(20, 16), rays=16, spacing="min10", clamp_pixels=(2.5, 15))
+    assert report["spacing"] == "min10" and report["clamp_pixels"] == {"lo": 2.5, "hi": 15.0}
+    assert 0 < report["records"] < 20 * 16 and C.shape == (16, 20)
+    with pytest.raises(ValueError, match="oracle"):
+        s.cache(size=(20, 16), spacing="oracle")
+    with pytest.raises(ValueError, match="is not one of"):
+        s.cache(size=(20, 16), spacing="nearest")
+
+
 def test_hmd_at_on_an_images_own_hits_keyed_by_pixel_equals_the_image() -> None:
     s = hmdist.Scene.builtin("cube")
     cam = hmdist.Camera((0.3, 4.3, 4.7), (0.0, 1.6, -1.6), fov_y_deg=60, size=(32, 24))

@@ -5,6 +5,7 @@
 //! exits with 1 where the two images are not the same bit for bit.
 
 mod bar;
+mod cache;
 mod diff;
 mod experiment;
 mod gpu;
@@ -50,6 +51,9 @@ enum Command {
     Points(points::PointsArgs),
     /// Merge the parts of `render --shard K/M` into the image one machine would render.
     Merge(merge::MergeArgs),
+    /// An irradiance cache whose records are spaced by a source of H (or a renderer's rule),
+    /// and its error against a brute-force image of E.
+    Cache(cache::CacheArgs),
     /// Build a photon map once, for `render --photon-map` (e.g. for every shard).
     #[command(subcommand)]
     Photons(photons::PhotonsCommand),
@@ -94,6 +98,7 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
         Command::Render(args) => render::run(args),
         Command::Points(args) => points::run(args),
         Command::Merge(args) => merge::run(args),
+        Command::Cache(args) => cache::run(args),
         Command::Photons(command) => photons::run(command),
         // `diff --exact` exits 1 where the images differ: an answer, not an error.
         Command::Diff(args) => return diff::run(args),

@@ -1,0 +1,577 @@
+//! `hmdist cache`: Ward's irradiance cache over an image's primary hits, its records placed
+//! coarse to fine and spaced by any source of H (or a renderer's rule), with what each part
+//! cost.
+//!
+//! **Placement.** Levels from a stride of `2^K` pixels down to 1 (Tabellion and Lamorlette
+//! 2004): at each level every pixel on the level's grid that no record made so far covers
+//! (ε < a) gets a record; the level's records are then made in parallel, in pixel order. The
+//! decisions of a level depend only on the records of the levels before it, so the records are
+//! the same whatever the thread count. Two records of one level may be closer than the rule
+//! allows; a record is never covered by one of an earlier level.
+//!
+//! **A record** at pixel p holds E from `irradiance`'s M rays with p's random numbers (so it
+//! is the irradiance image's pixel p, bit for bit) and a radius from the spacing source,
+//! clamped to pixel footprints and to fractions of `l_diag` where asked. A source that gives no
+//! H at a record (a photon-map hole, NaN) falls back to the H of the record's own rays.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::records::{interpolate, Record, RecordIndex};
+use super::spacing::{OwnRays, Range, Spacing};
+use crate::accel::{Accel, Hit};
+use crate::error::{Error, Result};
+use crate::estimators::{
+    AovSample, DistanceClamp, EstimateContext, GBuffer, IrradianceParams, PixelJob, Prepared, Tally,
+};
+use crate::image::HmdImage;
+use crate::options::{in_pool, RenderOptions};
+use crate::progress::{Progress, Silent};
+use crate::render::primary_hits;
+use crate::scene::Scene;
+
+/// Default accuracy a: Ward's recommended range is 0.1 … 0.2.
+pub const DEFAULT_ACCURACY: f32 = 0.2;
+
+/// What a cache is built with, besides the image's options.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CacheParams {
+    /// The records' irradiance: rays M, weighting, sampler, absorption.
+    pub irradiance: IrradianceParams,
+    /// Ward's a: a point uses records with ε < a.
+    pub accuracy: f32,
+    /// Where each record's radius comes from.
+    pub spacing: Spacing,
+    /// Clamp of the radius, in pixel footprints at the record (pbrt-v2: 2.5, 15).
+    pub clamp_pixels: Option<Range>,
+    /// Clamp of the radius, in fractions of `l_diag` (Mitsuba: 0.005, 0.32).
+    pub clamp_scene: Option<Range>,
+}
+
+impl Default for CacheParams {
+    fn default() -> Self {
+        CacheParams {
+            irradiance: IrradianceParams::default(),
+            accuracy: DEFAULT_ACCURACY,
+            spacing: Spacing::Hmd,
+            clamp_pixels: None,
+            clamp_scene: None,
+        }
+    }
+}
+
+/// Seconds of a cache's parts.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct CacheSeconds {
+    /// The BVH and the primary rays.
+    pub setup: f64,
+    /// The spacing estimator's preparation (a photon map; a GPU image of H).
+    pub spacing_prepare: f64,
+    /// The records' H from the spacing estimator (0 for the records' own rays or the oracle).
+    pub h: f64,
+    /// The records' irradiance (and their own rays' H, min, min10).
+    pub e: f64,
+    /// Every pixel's E from the records.
+    pub interpolate: f64,
+    /// Everything.
+    pub total: f64,
+}
+
+/// A cache's report: what it was built with, its records and what they cost.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct CacheReport {
+    /// hmdist's version.
+    pub hmdist_version: String,
+    /// `cache`.
+    pub method: String,
+    /// The scene's name.
+    pub scene: String,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// The random numbers' seed.
+    pub seed: u64,
+    /// Worker threads.
+    pub threads: usize,
+    /// The scene's bounding-box diagonal.
+    pub l_diag: f32,
+    /// Ward's a.
+    pub accuracy: f32,
+    /// The spacing source, as `--spacing` names it.
+    pub spacing: String,
+    /// The pixel-footprint clamp, `[lo, hi]`.
+    pub clamp_pixels: Option<Range>,
+    /// The scene clamp, `[lo, hi]` in fractions of `l_diag`.
+    pub clamp_scene: Option<Range>,
+    /// The records' irradiance parameters.
+    pub irradiance: IrradianceParams,
+    /// Records made.
+    pub records: usize,
+    /// Records made per level, coarsest first, with its stride in pixels.
+    pub records_per_level: Vec<(u32, usize)>,
+    /// Mean records a surface pixel uses.
+    pub mean_records_per_pixel: f64,
+    /// Rays cast for the records' E (gather and shadow rays).
+    pub rays_e: u64,
+    /// Rays cast for the records' H beyond those (the spacing estimator's, with its
+    /// preparation's: the photons' paths).
+    pub rays_h: u64,
+    /// Seconds of the parts.
+    pub seconds: CacheSeconds,
+    /// The error against a reference image of E, where one was given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reference: Option<CacheErrors>,
+}
+
+impl CacheReport {
+    /// Pretty JSON, with a final newline.
+    pub fn to_json(&self) -> String {
+        let mut json = serde_json::to_string_pretty(self).expect("a report serialises");
+        json.push('\n');
+        json
+    }
+
+    /// One line for the terminal.
+    pub fn summary(&self) -> String {
+        let mut line = format!(
+            "cache {} a={} on {} {}x{}: {} records, {:.2} used per pixel, {} + {} rays (E + H), {:.2} s",
+            self.spacing,
+            self.accuracy,
+            self.scene,
+            self.width,
+            self.height,
+            self.records,
+            self.mean_records_per_pixel,
+            self.rays_e,
+            self.rays_h,
+            self.seconds.total
+        );
+        if let Some(r) = &self.reference {
+            line += &format!(
+                "; relative error mean {:.2} %, p95 {:.2} %",
+                100.0 * r.mean_relative_error,
+                100.0 * r.p95_relative_error
+            );
+        }
+        line
+    }
+}
+
+/// A cache's error against a brute-force image of E (`render --method irradiance`).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct CacheErrors {
+    /// The reference's file, as given.
+    pub path: String,
+    /// Mean over the pixels of `|E − E_ref| / max(E_ref, 0.01 · mean E_ref)`.
+    pub mean_relative_error: f64,
+    /// Its 95th percentile.
+    pub p95_relative_error: f64,
+    /// Pixels compared (both values finite).
+    pub pixels: u64,
+}
+
+/// The cache's image and what it is made of.
+pub struct Cached {
+    /// E per pixel from the records; NaN for background.
+    pub image: HmdImage,
+    /// Records each pixel used; NaN for background.
+    pub records_used: Vec<f32>,
+    /// The records, in the order made.
+    pub records: Vec<Record>,
+    /// The report.
+    pub report: CacheReport,
+}
+
+impl Cached {
+    /// Each pixel's relative error against `reference` (the same size): `|E − E_ref| /
+    /// max(E_ref, 0.01 · mean E_ref)`, NaN where either is not finite; and its mean and p95
+    /// (into the report, under `path`).
+    pub fn compare(&mut self, reference: &HmdImage, path: &str) -> Result<Vec<f32>> {
+        let (w, h) = (self.image.width, self.image.height);
+        if (reference.width, reference.height) != (w, h) {
+            let message = format!(
+                "is {}x{}, the cache {w}x{h}: it must be an image of the same pixels",
+                reference.width, reference.height
+            );
+            return Err(Error::invalid("reference", message));
+        }
+        let finite: Vec<f64> = reference
+            .data
+            .iter()
+            .filter(|v| v.is_finite())
+            .map(|&v| v as f64)
+            .collect();
+        let floor = 0.01 * finite.iter().sum::<f64>() / finite.len().max(1) as f64;
+        let errors: Vec<f32> = self
+            .image
+            .data
+            .iter()
+            .zip(&reference.data)
+            .map(|(&e, &r)| {
+                if e.is_finite() && r.is_finite() {
+                    ((e as f64 - r as f64).abs() / (r as f64).max(floor)) as f32
+                } else {
+                    f32::NAN
+                }
+            })
+            .collect();
+        let mut sorted: Vec<f32> = errors.iter().copied().filter(|e| e.is_finite()).collect();
+        if sorted.is_empty() {
+            let message = "shares no pixel with a finite value with the cache: is it an image of this scene?";
+            return Err(Error::invalid("reference", message));
+        }
+        sorted.sort_unstable_by(f32::total_cmp);
+        let n = sorted.len();
+        let p95 = sorted[((0.95 * n as f64).ceil() as usize).clamp(1, n) - 1];
+        self.report.reference = Some(CacheErrors {
+            path: path.into(),
+            mean_relative_error: sorted.iter().map(|&e| e as f64).sum::<f64>() / n as f64,
+            p95_relative_error: p95 as f64,
+            pixels: n as u64,
+        });
+        Ok(errors)
+    }
+}
+
+/// The coarsest level's stride: the largest power of two at most an eighth of the image's
+/// shorter side (1 for images under 16 pixels).
+pub fn top_stride(width: u32, height: u32) -> u32 {
+    let side = (width.min(height) / 8).max(1);
+    1 << (31 - side.leading_zeros())
+}
+
+/// Builds the cache of `scene` as `options` frames it (size, seed, threads, BVH, kernel,
+/// `max_distance`; no AOVs, no shard). `oracle` is the image of H that `Spacing::Oracle`
+/// reads (the same size).
+pub fn cache(
+    scene: &Scene,
+    params: &CacheParams,
+    options: &RenderOptions,
+    oracle: Option<&HmdImage>,
+    progress: &dyn Progress,
+) -> Result<Cached> {
+    options.validate()?;
+    scene.validate()?;
+    if !(params.accuracy.is_finite() && params.accuracy > 0.0) {
+        let message = format!("must be a positive number, not {}", params.accuracy);
+        return Err(Error::invalid("accuracy", message));
+    }
+    if !options.aovs.is_empty() || options.shard.is_some() {
+        return Err(Error::parameter("a cache takes no AOVs and no shard"));
+    }
+    let (w, h) = (options.width, options.height);
+    match (&params.spacing, oracle) {
+        (Spacing::Oracle, None) => {
+            return Err(Error::invalid(
+                "spacing",
+                "oracle needs an image of H to read (--oracle)",
+            ));
+        }
+        (Spacing::Oracle, Some(image)) if (image.width, image.height) != (w, h) => {
+            let message = format!("is {}x{}, the cache {w}x{h}", image.width, image.height);
+            return Err(Error::invalid("oracle", message));
+        }
+        (Spacing::Oracle, Some(_)) => {}
+        (_, Some(_)) => return Err(Error::invalid("oracle", "is read only by --spacing oracle")),
+        (_, None) => {}
+    }
+    let irradiance = params.irradiance.build()?;
+    let light = scene.light.ok_or_else(|| {
+        let message = format!(
+            "a cache of irradiance needs a spot light, and scene '{}' has none: add a [light] to its TOML file",
+            scene.name
+        );
+        Error::invalid("scene", message)
+    })?;
+    let spacing = params.spacing.estimator()?;
+    let pixels = w as u64 * h as u64;
+    crate::memory::check(
+        Some("size"),
+        &format!("{w}x{h}"),
+        crate::render::image_bytes(pixels, 2),
+        None,
+    )?;
+    in_pool(options.threads, || {
+        let start = Instant::now();
+        let rays = pixels * (1 + 2 * params.irradiance.rays as u64);
+        let (accel, bvh) = Accel::for_work(&scene.mesh, options.bvh_quality, rays, options.kernel)?;
+        let gbuffer = primary_hits(&accel, scene, w, h);
+        crate::interrupt::check()?;
+        let l_diag = scene.bounds().diagonal();
+        let context = EstimateContext {
+            accel: &accel,
+            scene,
+            seed: options.seed,
+            clamp: DistanceClamp::for_diagonal(l_diag, options.max_distance),
+            aovs: &[],
+            whole_image: true,
+            bvh,
+        };
+        let mut seconds = CacheSeconds {
+            setup: start.elapsed().as_secs_f64(),
+            ..CacheSeconds::default()
+        };
+        let prepare_start = Instant::now();
+        let prepared = match &spacing {
+            Some(estimator) => Some(estimator.prepare(&context, &gbuffer, progress)?),
+            None => None,
+        };
+        seconds.spacing_prepare = prepare_start.elapsed().as_secs_f64();
+        let source = match (prepared, oracle) {
+            (Some(Prepared::Pixels { job, rays, .. }), _) => Source::Job(job, rays.map_or(0, |r| r.cast)),
+            (Some(Prepared::Done(estimate)), _) => {
+                Source::Image(estimate.hmd, estimate.rays.map_or(0, |r| r.cast))
+            }
+            (None, Some(image)) => Source::Image(image.data.clone(), 0),
+            (None, None) => Source::Own,
+        };
+        let placement = Placement {
+            context: &context,
+            gbuffer: &gbuffer,
+            irradiance: &irradiance,
+            light,
+            params,
+            source: &source,
+            pixel_size: 2.0 * (scene.camera.fov_y_deg.to_radians() / 2.0).tan() / h as f32,
+            l_diag,
+        };
+        let (records, index, counts) = placement.place(&mut seconds, progress)?;
+        let interpolate_start = Instant::now();
+        let (image, records_used) = placement.interpolate(&records, &index, progress)?;
+        seconds.interpolate = interpolate_start.elapsed().as_secs_f64();
+        seconds.total = start.elapsed().as_secs_f64();
+        let used: Vec<f64> = records_used
+            .iter()
+            .filter(|u| u.is_finite())
+            .map(|&u| u as f64)
+            .collect();
+        let report = CacheReport {
+            hmdist_version: env!("CARGO_PKG_VERSION").into(),
+            method: "cache".into(),
+            scene: scene.name.clone(),
+            width: w,
+            height: h,
+            seed: options.seed,
+            threads: rayon::current_num_threads(),
+            l_diag,
+            accuracy: params.accuracy,
+            spacing: params.spacing.name(),
+            clamp_pixels: params.clamp_pixels,
+            clamp_scene: params.clamp_scene,
+            irradiance: params.irradiance.clone(),
+            records: records.len(),
+            records_per_level: counts.levels,
+            mean_records_per_pixel: used.iter().sum::<f64>() / used.len().max(1) as f64,
+            rays_e: counts.rays_e,
+            rays_h: counts.rays_h + source.prepared_rays(),
+            seconds,
+            reference: None,
+        };
+        Ok(Cached {
+            image: HmdImage::new(w, h, image),
+            records_used,
+            records,
+            report,
+        })
+    })?
+}
+
+/// Where the records' H comes from.
+enum Source<'a> {
+    /// The records' own rays (`hmd`, `min`, `min10`).
+    Own,
+    /// A per-pixel estimator's job, and the rays its preparation cast.
+    Job(Box<dyn PixelJob + 'a>, u64),
+    /// A whole image of H (the oracle, or an estimator that made the whole image at once), and
+    /// the rays it cost.
+    Image(Vec<f32>, u64),
+}
+
+impl Source<'_> {
+    fn prepared_rays(&self) -> u64 {
+        match self {
+            Source::Own => 0,
+            Source::Job(_, rays) | Source::Image(_, rays) => *rays,
+        }
+    }
+}
+
+/// Records made, per level, and the rays they cast.
+#[derive(Default)]
+struct Counts {
+    levels: Vec<(u32, usize)>,
+    rays_e: u64,
+    rays_h: u64,
+}
+
+/// What placing records needs.
+struct Placement<'a> {
+    context: &'a EstimateContext<'a>,
+    gbuffer: &'a GBuffer,
+    irradiance: &'a crate::estimators::Irradiance,
+    light: crate::scene::SpotLight,
+    params: &'a CacheParams,
+    source: &'a Source<'a>,
+    /// A pixel's footprint per unit of distance from the camera.
+    pixel_size: f32,
+    l_diag: f32,
+}
+
+impl Placement<'_> {
+    fn hit(&self, pixel: u32) -> &Hit {
+        self.gbuffer.points[pixel as usize]
+            .as_ref()
+            .expect("a surface pixel")
+    }
+
+    /// Every level's records, coarse to fine, and the index over them.
+    fn place(
+        &self,
+        seconds: &mut CacheSeconds,
+        progress: &dyn Progress,
+    ) -> Result<(Vec<Record>, RecordIndex, Counts)> {
+        let (w, h) = (self.gbuffer.width, self.gbuffer.height);
+        let mut records: Vec<Record> = vec![];
+        let mut index = RecordIndex::new(self.params.accuracy, self.l_diag / 256.0);
+        let mut counts = Counts::default();
+        let top = top_stride(w, h).trailing_zeros();
+        for level in (0..=top).rev() {
+            let stride = 1u32 << level;
+            let grid: Vec<u32> = (0..h)
+                .step_by(stride as usize)
+                .flat_map(|y| (0..w).step_by(stride as usize).map(move |x| y * w + x))
+                .collect();
+            let needy: Vec<u32> = grid
+                .into_par_iter()
+                .filter(|&p| {
+                    self.gbuffer.points[p as usize]
+                        .as_ref()
+                        .is_some_and(|hit| !index.covers(&records, p, hit.point, hit.normal))
+                })
+                .collect();
+            crate::interrupt::check()?;
+            progress.start(&format!("records, stride {stride}"), needy.len() as u64);
+            let e_start = Instant::now();
+            let made: Vec<(f32, Tally, OwnRays)> = needy
+                .par_iter()
+                .map(|&p| {
+                    let mut own = OwnRays::new(self.context.clamp);
+                    let (e, tally) = if crate::interrupt::requested() {
+                        (f32::NAN, Tally::default())
+                    } else {
+                        let c = self.context;
+                        let key = (c.seed, p as u64);
+                        let observe = |t, w| own.add(t, w);
+                        self.irradiance
+                            .at(c.accel, &self.light, self.hit(p), key, c.clamp.max, observe)
+                    };
+                    progress.advance(1);
+                    (e, tally, own)
+                })
+                .collect();
+            progress.finish();
+            crate::interrupt::check()?;
+            seconds.e += e_start.elapsed().as_secs_f64();
+            let h_start = Instant::now();
+            let radii = self.radii(&needy, &made)?;
+            seconds.h += h_start.elapsed().as_secs_f64();
+            for ((&p, (e, tally, _)), (radius, h_tally)) in needy.iter().zip(&made).zip(radii) {
+                counts.rays_e += tally.rays;
+                counts.rays_h += h_tally.rays;
+                let hit = self.hit(p);
+                let record = Record {
+                    pixel: p,
+                    point: hit.point,
+                    normal: hit.normal,
+                    e: *e,
+                    radius: self.clamped(radius, hit),
+                    level,
+                };
+                index.insert(records.len() as u32, &record);
+                records.push(record);
+            }
+            counts.levels.push((stride, needy.len()));
+        }
+        Ok((records, index, counts))
+    }
+
+    /// The records' H (before clamping) at pixels `needy` whose own rays are `made`, and the
+    /// rays each cost beyond them.
+    fn radii(&self, needy: &[u32], made: &[(f32, Tally, OwnRays)]) -> Result<Vec<(f32, Tally)>> {
+        let spacing = &self.params.spacing;
+        let own = |i: usize| made[i].2;
+        let found: Vec<(f32, Tally)> = match self.source {
+            Source::Own => (0..needy.len())
+                .map(|i| {
+                    (
+                        own(i).radius(spacing).expect("a source of the own rays"),
+                        Tally::default(),
+                    )
+                })
+                .collect(),
+            Source::Image(hmd, _) => needy
+                .iter()
+                .map(|&p| (hmd[p as usize], Tally::default()))
+                .collect(),
+            Source::Job(job, _) => needy
+                .par_iter()
+                .map_init(
+                    || job.worker(&Silent),
+                    |worker, &p| {
+                        let (mut tally, mut aov) = (Tally::default(), AovSample::default());
+                        let hmd = worker.pixel(self.hit(p), p as u64, &mut tally, &mut aov);
+                        (hmd, tally)
+                    },
+                )
+                .collect(),
+        };
+        crate::interrupt::check()?;
+        // No H from the source (a photon-map hole): the record's own rays'.
+        Ok(found
+            .into_iter()
+            .enumerate()
+            .map(|(i, (r, tally))| (if r.is_nan() { own(i).hmd() } else { r }, tally))
+            .collect())
+    }
+
+    /// `radius` clamped as asked, at `hit` (its distance from the camera sets the footprint).
+    fn clamped(&self, radius: f32, hit: &Hit) -> f32 {
+        let mut r = radius;
+        if let Some(range) = self.params.clamp_pixels {
+            r = range.apply(r, hit.t * self.pixel_size);
+        }
+        if let Some(range) = self.params.clamp_scene {
+            r = range.apply(r, self.l_diag);
+        }
+        r
+    }
+
+    /// Every pixel's E from the records, and how many records it used.
+    fn interpolate(
+        &self,
+        records: &[Record],
+        index: &RecordIndex,
+        progress: &dyn Progress,
+    ) -> Result<(Vec<f32>, Vec<f32>)> {
+        let pixels = self.gbuffer.points.len();
+        progress.start("interpolate", pixels as u64);
+        let (image, used): (Vec<f32>, Vec<f32>) = (0..pixels)
+            .into_par_iter()
+            .map_init(Vec::new, |covering, p| {
+                progress.advance(1);
+                match &self.gbuffer.points[p] {
+                    None => (f32::NAN, f32::NAN),
+                    Some(hit) => {
+                        index.covering(records, p as u32, hit.point, hit.normal, covering);
+                        (interpolate(records, covering), covering.len() as f32)
+                    }
+                }
+            })
+            .unzip();
+        progress.finish();
+        crate::interrupt::check()?;
+        Ok((image, used))
+    }
+}

@@ -1,0 +1,18 @@
+//! The irradiance cache (Ward 1988) that H exists to space: records of one-bounce irradiance
+//! ([`crate::estimators::irradiance`]) placed coarse to fine over an image's primary hits,
+//! each holding for a radius from H (any estimator's, or the records' own rays') or from a
+//! renderer's rule (pbrt-v2's, Mitsuba's), and every pixel's E interpolated from the records
+//! that cover it: so that an estimator of H is judged by the cache it makes.
+//!
+//! `records.rs` holds the records, Ward's weight and the grid that finds them; `spacing.rs`
+//! where a radius comes from; `build.rs` the placement, the interpolation and the report.
+
+mod build;
+mod records;
+mod spacing;
+
+pub use build::{
+    cache, top_stride, CacheErrors, CacheParams, CacheReport, CacheSeconds, Cached, DEFAULT_ACCURACY,
+};
+pub use records::{interpolate, Record};
+pub use spacing::{Range, Spacing};

@@ -1,0 +1,211 @@
+//! An irradiance cache's records, Ward's weight, and a grid that finds the records covering a
+//! point.
+
+use std::collections::HashMap;
+
+use glam::Vec3;
+
+/// One record: the irradiance at a pixel's surface point and the radius it holds for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Record {
+    /// The pixel (row-major index) whose surface point it is.
+    pub pixel: u32,
+    /// The point x_i.
+    pub point: Vec3,
+    /// Its normal n_i, facing the camera.
+    pub normal: Vec3,
+    /// Its irradiance E_i.
+    pub e: f32,
+    /// Its radius R_i.
+    pub radius: f32,
+    /// The placement level it was made at (0: every pixel; k: every 2^k-th).
+    pub level: u32,
+}
+
+impl Record {
+    /// Ward's ε_i at `point` with `normal`: `‖x − x_i‖ / R_i + √(1 − n·n_i)`. A point uses the
+    /// record where ε_i < a, with weight 1/ε_i. The record's own pixel has ε = 0.
+    pub fn error(&self, pixel: u32, point: Vec3, normal: Vec3) -> f32 {
+        if pixel == self.pixel {
+            return 0.0;
+        }
+        let distance = (point - self.point).length();
+        let spatial = if distance == 0.0 {
+            0.0
+        } else {
+            distance / self.radius
+        };
+        spatial + (1.0 - normal.dot(self.normal)).max(0.0).sqrt()
+    }
+}
+
+/// A sphere reaching over more cells than this goes to the list every query reads.
+const MOST_CELLS: f64 = 4096.0;
+
+/// The records in a uniform grid: each in every cell its sphere of influence (radius
+/// `a · R_i`, outside which ε_i ≥ a) overlaps, or, where that is too many cells, in a list
+/// every query reads. Lookups are in record order, so sums over them do not depend on threads.
+pub(crate) struct RecordIndex {
+    accuracy: f32,
+    cell: f32,
+    cells: HashMap<[i32; 3], Vec<u32>>,
+    everywhere: Vec<u32>,
+}
+
+impl RecordIndex {
+    /// An empty index for accuracy `a`, with cells of side `cell`.
+    pub fn new(accuracy: f32, cell: f32) -> Self {
+        RecordIndex {
+            accuracy,
+            cell,
+            cells: HashMap::new(),
+            everywhere: vec![],
+        }
+    }
+
+    fn cell_of(&self, p: Vec3) -> [i32; 3] {
+        // `as` saturates: a point far outside the scene lands in an edge cell.
+        (p / self.cell).floor().to_array().map(|c| c as i32)
+    }
+
+    /// Adds record `id` (its ids must grow with each insert).
+    pub fn insert(&mut self, id: u32, record: &Record) {
+        let reach = self.accuracy * record.radius;
+        if !reach.is_finite() {
+            self.everywhere.push(id);
+            return;
+        }
+        let lo = self.cell_of(record.point - Vec3::splat(reach));
+        let hi = self.cell_of(record.point + Vec3::splat(reach));
+        let cells: f64 = (0..3).map(|k| (hi[k] as f64 - lo[k] as f64) + 1.0).product();
+        if cells > MOST_CELLS {
+            self.everywhere.push(id);
+            return;
+        }
+        for x in lo[0]..=hi[0] {
+            for y in lo[1]..=hi[1] {
+                for z in lo[2]..=hi[2] {
+                    self.cells.entry([x, y, z]).or_default().push(id);
+                }
+            }
+        }
+    }
+
+    /// The records pixel `pixel`'s point uses (ε < a), as (id, ε) in id order, into `out`.
+    pub fn covering(
+        &self,
+        records: &[Record],
+        pixel: u32,
+        point: Vec3,
+        normal: Vec3,
+        out: &mut Vec<(u32, f32)>,
+    ) {
+        out.clear();
+        let cell = self.cells.get(&self.cell_of(point));
+        for &id in cell.into_iter().flatten().chain(&self.everywhere) {
+            let error = records[id as usize].error(pixel, point, normal);
+            if error < self.accuracy {
+                out.push((id, error));
+            }
+        }
+        out.sort_unstable_by_key(|&(id, _)| id);
+    }
+
+    /// Whether any record covers pixel `pixel`'s point.
+    pub fn covers(&self, records: &[Record], pixel: u32, point: Vec3, normal: Vec3) -> bool {
+        let cell = self.cells.get(&self.cell_of(point));
+        cell.into_iter()
+            .flatten()
+            .chain(&self.everywhere)
+            .any(|&id| records[id as usize].error(pixel, point, normal) < self.accuracy)
+    }
+}
+
+/// E at a point from the records covering it (`covering`, as [`RecordIndex::covering`] gives
+/// them): the record at the point itself where there is one (ε = 0), else
+/// `Σ w_i E_i / Σ w_i` with `w_i = 1/ε_i`. NaN where none covers it.
+pub fn interpolate(records: &[Record], covering: &[(u32, f32)]) -> f32 {
+    if let Some(&(id, _)) = covering.iter().find(|(_, error)| *error == 0.0) {
+        return records[id as usize].e;
+    }
+    let (mut sum, mut weights) = (0.0f64, 0.0f64);
+    for &(id, error) in covering {
+        let w = 1.0 / error as f64;
+        sum += w * records[id as usize].e as f64;
+        weights += w;
+    }
+    (sum / weights) as f32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(pixel: u32, x: f32, e: f32, radius: f32) -> Record {
+        Record {
+            pixel,
+            point: Vec3::new(x, 0.0, 0.0),
+            normal: Vec3::Z,
+            e,
+            radius,
+            level: 0,
+        }
+    }
+
+    #[test]
+    fn wards_weight_by_distance_and_normal() {
+        let r = record(0, 0.0, 1.0, 2.0);
+        assert_eq!(
+            r.error(0, Vec3::new(5.0, 0.0, 0.0), -Vec3::Z),
+            0.0,
+            "its own pixel"
+        );
+        assert_eq!(r.error(1, Vec3::new(1.0, 0.0, 0.0), Vec3::Z), 0.5);
+        let tilted = Vec3::new(0.6, 0.0, 0.8);
+        let expected = (1.0f32 - 0.8).sqrt();
+        assert!((r.error(1, Vec3::ZERO, tilted) - expected).abs() < 1e-6);
+    }
+
+    #[test]
+    fn the_index_finds_exactly_the_records_a_scan_finds() {
+        let records: Vec<Record> = (0..200)
+            .map(|i| {
+                let x = (i as f32 * 0.37).sin() * 10.0;
+                let radius = if i % 50 == 0 {
+                    f32::INFINITY
+                } else {
+                    0.5 + (i % 7) as f32
+                };
+                record(i, x, i as f32, radius)
+            })
+            .collect();
+        let a = 0.3;
+        let mut index = RecordIndex::new(a, 0.25);
+        for (id, r) in records.iter().enumerate() {
+            index.insert(id as u32, r);
+        }
+        let mut found = vec![];
+        for k in 0..400 {
+            let point = Vec3::new(-12.0 + k as f32 * 0.06, 0.01 * k as f32, 0.0);
+            index.covering(&records, 1000, point, Vec3::Z, &mut found);
+            let scan: Vec<(u32, f32)> = records
+                .iter()
+                .enumerate()
+                .map(|(id, r)| (id as u32, r.error(1000, point, Vec3::Z)))
+                .filter(|&(_, e)| e < a)
+                .collect();
+            assert_eq!(found, scan, "at {point}");
+            assert_eq!(index.covers(&records, 1000, point, Vec3::Z), !scan.is_empty());
+        }
+    }
+
+    #[test]
+    fn interpolation_weights_by_the_inverse_error_and_takes_an_exact_record() {
+        let records = [record(0, 0.0, 1.0, 1.0), record(1, 1.0, 4.0, 1.0)];
+        // ε 0.25 and 0.75: weights 4 and 4/3.
+        let e = interpolate(&records, &[(0, 0.25), (1, 0.75)]);
+        assert!((e - (4.0 * 1.0 + 4.0 / 3.0 * 4.0) / (4.0 + 4.0 / 3.0)).abs() < 1e-6);
+        assert_eq!(interpolate(&records, &[(0, 0.25), (1, 0.0)]), 4.0);
+        assert!(interpolate(&records, &[]).is_nan());
+    }
+}

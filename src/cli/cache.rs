@@ -1,0 +1,229 @@
+//! `hmdist cache`: an irradiance cache of one scene, its records spaced by a source of H or a
+//! renderer's rule, with its error against a brute-force image of E when one is given.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use clap::Args;
+use image::{Rgb, RgbImage};
+
+use hmdist::cache::{cache, CacheParams, Range, Spacing, DEFAULT_ACCURACY};
+use hmdist::error::{Error, Result};
+use hmdist::estimators::irradiance::{self, IrradianceParams};
+use hmdist::image::{exr, picture, HmdImage, OutputSet};
+use hmdist::report::RenderReport;
+use hmdist::scene::Scene;
+
+use super::bar::Bar;
+
+#[derive(Args)]
+pub struct CacheArgs {
+    /// Scene: a built-in (cube, hall, ...) or a file; it needs a spot light.
+    #[arg(long, default_value = "cube")]
+    scene: String,
+    /// Ward's accuracy a: a point uses the records with ε = ‖x − x_i‖/R_i + √(1 − n·n_i) < a.
+    #[arg(long, default_value_t = DEFAULT_ACCURACY)]
+    accuracy: f32,
+    /// Where each record's radius R comes from: hmd (H of its own rays), hmd:METHOD[:NAME=VALUE,...]
+    /// (H from an estimator: hmd:gather:rays=64, hmd:photon2:photons=100000,nearest=64),
+    /// min (pbrt-v2: half the nearest hit), min10 (Mitsuba: the nearest hit above 10°), or
+    /// oracle (H from --oracle).
+    #[arg(long, default_value = "hmd", value_name = "SOURCE")]
+    spacing: String,
+    /// Clamp R to LO..HI pixel footprints at the record (pbrt-v2: 2.5,15; Mitsuba: 3,20).
+    #[arg(long, value_name = "LO,HI")]
+    clamp_pixels: Option<String>,
+    /// Clamp R to LO..HI times l_diag (Mitsuba: 0.005,0.32).
+    #[arg(long, value_name = "LO,HI")]
+    clamp_scene: Option<String>,
+    /// An image of H of the same pixels, read by --spacing oracle.
+    #[arg(long, value_name = "H.exr")]
+    oracle: Option<PathBuf>,
+    /// A brute-force image of E of the same pixels (`render --method irradiance`): the
+    /// report's mean and p95 relative error, and --diff-png.
+    #[arg(long, value_name = "E.exr")]
+    reference: Option<PathBuf>,
+    #[command(flatten)]
+    irradiance: IrradianceParams,
+    #[command(flatten)]
+    image: super::image_args::ImageArgs,
+    /// Stop the records' gather rays at D [default: no limit].
+    #[arg(long, value_name = "D")]
+    max_distance: Option<f32>,
+    /// EXR output: channels E (the cache's irradiance) and records (records each pixel used).
+    #[arg(long, default_value = "cache.exr")]
+    out: PathBuf,
+    /// PNG output: grey = clamp(scale * E), each record's pixel red [default: the EXR path
+    /// with .png].
+    #[arg(long)]
+    png: Option<PathBuf>,
+    /// JSON report: records, rays, seconds, errors [default: the EXR path with .json].
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// A false-colour PNG of each pixel's relative error against --reference.
+    #[arg(long, value_name = "FILE")]
+    diff_png: Option<PathBuf>,
+    /// Display scale of the PNG: its exposure [default: l_diag²/1.6].
+    #[arg(long)]
+    scale: Option<f32>,
+    /// No progress bar and no summary line.
+    #[arg(long)]
+    quiet: bool,
+}
+
+pub fn run(args: CacheArgs) -> Result<()> {
+    let params = CacheParams {
+        irradiance: args.irradiance.clone(),
+        accuracy: args.accuracy,
+        spacing: Spacing::parse(&args.spacing)?,
+        clamp_pixels: args
+            .clamp_pixels
+            .as_deref()
+            .map(|t| Range::parse("clamp_pixels", t))
+            .transpose()?,
+        clamp_scene: args
+            .clamp_scene
+            .as_deref()
+            .map(|t| Range::parse("clamp_scene", t))
+            .transpose()?,
+    };
+    if let Some(s) = args.scale.filter(|s| !(s.is_finite() && *s > 0.0)) {
+        return Err(Error::invalid(
+            "scale",
+            format!("must be a positive number, not {s}"),
+        ));
+    }
+    if args.diff_png.is_some() && args.reference.is_none() {
+        return Err(Error::invalid(
+            "diff_png",
+            "needs --reference: the error is against it",
+        ));
+    }
+    let options = hmdist::render::RenderOptions {
+        max_distance: args.max_distance,
+        ..args.image.options()?
+    };
+    options.validate()?;
+    let png = args.png.clone().unwrap_or_else(|| args.out.with_extension("png"));
+    let json = args
+        .json
+        .clone()
+        .unwrap_or_else(|| args.out.with_extension("json"));
+    let mut paths: Vec<&Path> = vec![&args.out, &png, &json];
+    paths.extend(args.diff_png.as_deref());
+    let mut inputs = Scene::files_read(&args.scene);
+    inputs.extend(args.oracle.iter().chain(&args.reference).cloned());
+    let inputs: Vec<&Path> = inputs.iter().map(|p| p.as_path()).collect();
+    let outputs = OutputSet::reserve(&paths, &inputs)?;
+    for (path, format) in [(&args.out, "exr"), (&png, "png"), (&json, "json")] {
+        hmdist::files::check_extension(path, format)?;
+    }
+    if let Some(path) = &args.diff_png {
+        hmdist::files::check_extension(path, "png")?;
+    }
+
+    let bar = Bar::new(args.quiet);
+    bar.status("loading");
+    let load_start = Instant::now();
+    let scene = Scene::load(&args.scene)?;
+    let load_seconds = load_start.elapsed().as_secs_f64();
+    let size = (options.width, options.height);
+    let oracle = args
+        .oracle
+        .as_deref()
+        .map(|path| image_of(path, exr::CHANNEL, "oracle", &scene, size))
+        .transpose()?;
+    let reference = args
+        .reference
+        .as_deref()
+        .map(|path| image_of(path, exr::IRRADIANCE_CHANNEL, "reference", &scene, size))
+        .transpose()?;
+    bar.status("BVH");
+    let mut cached = cache(&scene, &params, &options, oracle.as_ref(), &bar)?;
+    cached.report.seconds.total += load_seconds;
+    let errors = match (&reference, &args.reference) {
+        (Some(image), Some(path)) => Some(cached.compare(image, &path.display().to_string())?),
+        _ => None,
+    };
+
+    let (w, h) = size;
+    let channels: [(&str, &[f32]); 2] = [
+        (exr::IRRADIANCE_CHANNEL, &cached.image.data),
+        ("records", &cached.records_used),
+    ];
+    let exr_bytes = exr::encode_channels(&channels, size, &args.out)?;
+    let scale = args
+        .scale
+        .unwrap_or_else(|| irradiance::display_scale(cached.report.l_diag));
+    let mut picture: RgbImage =
+        image::DynamicImage::ImageLuma8(picture::grey(&cached.image, scale)).to_rgb8();
+    for record in &cached.records {
+        picture.put_pixel(record.pixel % w, record.pixel / w, Rgb([230, 30, 30]));
+    }
+    let mut contents = vec![
+        exr_bytes,
+        picture::encode_png(&picture, &png)?,
+        cached.report.to_json().into_bytes(),
+    ];
+    if let (Some(path), Some(errors)) = (&args.diff_png, &errors) {
+        let colours =
+            picture::false_colour_scaled(errors, w, h, "relative error", picture::ColourScale::Linear);
+        contents.push(picture::encode_png(&colours, path)?);
+    }
+    outputs.commit(&contents.iter().map(|c| c.as_slice()).collect::<Vec<_>>())?;
+    if !args.quiet {
+        println!(
+            "{} -> {}, {}, {}",
+            cached.report.summary(),
+            args.out.display(),
+            png.display(),
+            json.display()
+        );
+    }
+    Ok(())
+}
+
+/// Channel `channel` of the EXR at `path` (`--oracle` or `--reference`, named `flag`), checked
+/// against the cache to come: the same size, and where its JSON sidecar is there, the same
+/// scene (and for a reference of E, an irradiance image).
+fn image_of(
+    path: &Path,
+    channel: &str,
+    flag: &'static str,
+    scene: &Scene,
+    size: (u32, u32),
+) -> Result<HmdImage> {
+    let image = exr::read_channel(path, channel).map_err(|e| {
+        let hint = if channel == exr::IRRADIANCE_CHANNEL {
+            "make one with hmdist render --method irradiance"
+        } else {
+            "an image of H"
+        };
+        Error::invalid(flag, format!("{}: {hint}", e.describe(|n| n.into())))
+    })?;
+    if (image.width, image.height) != size {
+        let message = format!(
+            "{} is {}x{}, the cache {}x{}: it must be an image of the same pixels",
+            path.display(),
+            image.width,
+            image.height,
+            size.0,
+            size.1
+        );
+        return Err(Error::invalid(flag, message));
+    }
+    let sidecar = path.with_extension("json");
+    if sidecar.is_file() {
+        let report = RenderReport::read(&sidecar)?;
+        if report.scene != scene.name {
+            let message = format!(
+                "{} is an image of scene '{}', the cache's is '{}'",
+                path.display(),
+                report.scene,
+                scene.name
+            );
+            return Err(Error::invalid(flag, message));
+        }
+    }
+    Ok(image)
+}

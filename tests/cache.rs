@@ -1,0 +1,217 @@
+//! `hmdist cache` and the library's `cache`: the brute-force image in the limit a → 0, the
+//! same records whatever the threads, the placement rule level by level, the error against a
+//! reference, and refusals by name.
+
+mod common;
+
+use common::cli::{hmdist_ok, read_json, refuses};
+use common::Scratch;
+use hmdist::cache::{cache, CacheParams, Spacing};
+use hmdist::estimators::IrradianceParams;
+use hmdist::image::exr;
+use hmdist::progress::Silent;
+use hmdist::render::RenderOptions;
+use hmdist::scene::Scene;
+
+const SIZE: &str = "64x48";
+
+/// `irradiance` and `cache` of `cube` at [`SIZE`] with 16 rays.
+fn irradiance(dir: &Scratch, out: &str) {
+    hmdist_ok(
+        dir.path(),
+        &[
+            "render",
+            "--quiet",
+            "--method",
+            "irradiance",
+            "--size",
+            SIZE,
+            "--rays",
+            "16",
+            "--out",
+            out,
+        ],
+    );
+}
+
+fn cache_args<'a>(out: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
+    let mut args = vec!["cache", "--quiet", "--size", SIZE, "--rays", "16", "--out", out];
+    args.extend_from_slice(extra);
+    args
+}
+
+#[test]
+fn a_tiny_accuracy_gives_every_pixel_its_own_record_and_the_brute_force_image() {
+    let dir = Scratch::new("cache-limit");
+    irradiance(&dir, "e.exr");
+    hmdist_ok(
+        dir.path(),
+        &cache_args("c.exr", &["--accuracy", "1e-9", "--reference", "e.exr"]),
+    );
+    let (e, cached) = (
+        exr::read_channel(&dir.join("e.exr"), "E").unwrap(),
+        exr::read_channel(&dir.join("c.exr"), "E").unwrap(),
+    );
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&cached.data), bits(&e.data));
+    let report = read_json(&dir.join("c.json"));
+    assert_eq!(
+        report["records"],
+        64 * 48,
+        "cube is closed: every pixel a surface"
+    );
+    assert_eq!(report["reference"]["mean_relative_error"], 0.0);
+    let used = exr::read_channel(&dir.join("c.exr"), "records").unwrap();
+    assert!(used.data.iter().all(|&n| n == 1.0));
+    // With a usual accuracy the cache makes far fewer records and errs a little.
+    hmdist_ok(
+        dir.path(),
+        &cache_args("d.exr", &["--accuracy", "0.3", "--reference", "e.exr"]),
+    );
+    let report = read_json(&dir.join("d.json"));
+    let records = report["records"].as_u64().unwrap();
+    assert!(records < 64 * 48 / 3, "{records} records");
+    let error = report["reference"]["mean_relative_error"].as_f64().unwrap();
+    assert!(error > 0.0 && error < 0.5, "mean relative error {error}");
+}
+
+#[test]
+fn the_same_records_whatever_the_threads_and_each_outside_the_coarser_records() {
+    let scene = Scene::load("cube").unwrap();
+    for spacing in [
+        "hmd",
+        "min10",
+        "hmd:gather:rays=8",
+        "hmd:photon1:photons=3000,nearest=16",
+    ] {
+        let params = CacheParams {
+            irradiance: IrradianceParams {
+                rays: 16,
+                ..IrradianceParams::default()
+            },
+            accuracy: 0.25,
+            spacing: Spacing::parse(spacing).unwrap(),
+            ..CacheParams::default()
+        };
+        let run = |threads| {
+            let options = RenderOptions {
+                width: 40,
+                height: 30,
+                threads: Some(threads),
+                ..RenderOptions::default()
+            };
+            cache(&scene, &params, &options, None, &Silent).unwrap()
+        };
+        let (one, two) = (run(1), run(2));
+        assert_eq!(one.records, two.records, "{spacing}");
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&one.image.data), bits(&two.image.data), "{spacing}");
+        // A record is made only where no record of a coarser level covers its pixel.
+        for record in &one.records {
+            for earlier in one.records.iter().filter(|r| r.level > record.level) {
+                let error = earlier.error(record.pixel, record.point, record.normal);
+                assert!(
+                    error >= params.accuracy,
+                    "{spacing}: {record:?} is covered by {earlier:?}"
+                );
+            }
+        }
+        assert!(one.records.iter().any(|r| r.level > 0) && one.records.len() < 40 * 30);
+        assert!(one.image.data.iter().all(|e| e.is_finite() && *e >= 0.0));
+    }
+}
+
+#[test]
+fn oracle_spacing_reads_an_image_of_h_and_places_the_same_records_twice() {
+    let dir = Scratch::new("cache-oracle");
+    hmdist_ok(
+        dir.path(),
+        &[
+            "render", "--quiet", "--size", SIZE, "--rays", "64", "--out", "h.exr",
+        ],
+    );
+    for out in ["a.exr", "b.exr"] {
+        hmdist_ok(
+            dir.path(),
+            &cache_args(out, &["--spacing", "oracle", "--oracle", "h.exr"]),
+        );
+    }
+    for name in ["a.exr", "a.png"] {
+        let other = name.replace('a', "b");
+        assert!(
+            std::fs::read(dir.join(name)).unwrap() == std::fs::read(dir.join(&other)).unwrap(),
+            "{name} and {other} differ"
+        );
+    }
+    assert_eq!(read_json(&dir.join("a.json"))["spacing"], "oracle");
+}
+
+#[test]
+fn bad_input_is_refused_by_name() {
+    for (case, extra, says) in [
+        ("a0", &["--accuracy", "0"][..], "--accuracy"),
+        ("a-neg", &["--accuracy=-0.1"], "--accuracy"),
+        (
+            "source",
+            &["--spacing", "nearest"],
+            "--spacing 'nearest' is not one of",
+        ),
+        (
+            "source-method",
+            &["--spacing", "hmd:irradiance"],
+            "does not estimate H",
+        ),
+        ("oracle-missing", &["--spacing", "oracle"], "--oracle"),
+        ("clamp", &["--clamp-pixels", "15,2.5"], "--clamp-pixels"),
+        ("no-light", &["--scene", "slab"], "has none"),
+    ] {
+        refuses(&format!("cache-{case}"), &[], &cache_args("c.exr", extra), says);
+    }
+    // A reference of another size, and of another scene.
+    let dir = Scratch::new("cache-reference");
+    hmdist_ok(
+        dir.path(),
+        &[
+            "render",
+            "--quiet",
+            "--method",
+            "irradiance",
+            "--size",
+            "16x12",
+            "--rays",
+            "4",
+            "--out",
+            "small.exr",
+        ],
+    );
+    hmdist_ok(
+        dir.path(),
+        &[
+            "render",
+            "--quiet",
+            "--method",
+            "irradiance",
+            "--scene",
+            "hall",
+            "--size",
+            SIZE,
+            "--rays",
+            "4",
+            "--out",
+            "hall.exr",
+        ],
+    );
+    for (reference, says) in [
+        ("small.exr", "16x12, the cache 64x48"),
+        ("hall.exr", "scene 'hall'"),
+    ] {
+        let out = common::cli::hmdist(dir.path(), &cache_args("c.exr", &["--reference", reference]));
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{stderr}");
+        assert!(
+            stderr.contains("--reference") && stderr.contains(says),
+            "{stderr}"
+        );
+        assert!(!dir.join("c.exr").exists());
+    }
+}
