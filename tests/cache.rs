@@ -163,7 +163,7 @@ fn bad_input_is_refused_by_name() {
         ),
         ("oracle-missing", &["--spacing", "oracle"], "--oracle"),
         ("clamp", &["--clamp-pixels", "15,2.5"], "--clamp-pixels"),
-        ("no-light", &["--scene", "slab"], "has none"),
+        ("no-light", &["--scene", "slab"], "has no spot light"),
     ] {
         refuses(&format!("cache-{case}"), &[], &cache_args("c.exr", extra), says);
     }

@@ -142,7 +142,7 @@ fn what_irradiance_cannot_do_is_refused_by_name() {
         "irradiance-no-light",
         &[],
         &render_args(&["--method", "irradiance", "--scene", "slab"]),
-        "has none",
+        "has no spot light",
     );
     refuses(
         "irradiance-gpu",

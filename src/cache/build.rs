@@ -23,13 +23,14 @@ use super::spacing::{OwnRays, Range, Spacing};
 use crate::accel::{Accel, Hit};
 use crate::error::{Error, Result};
 use crate::estimators::{
-    AovSample, DistanceClamp, EstimateContext, GBuffer, IrradianceParams, PixelJob, Prepared, Tally,
+    AovSample, DistanceClamp, EstimateContext, Estimator, GBuffer, Irradiance, IrradianceParams, PixelJob,
+    Prepared, Tally,
 };
 use crate::image::HmdImage;
 use crate::options::{in_pool, RenderOptions};
 use crate::progress::{Progress, Silent};
 use crate::render::primary_hits;
-use crate::scene::Scene;
+use crate::scene::{Scene, SpotLight};
 
 /// Default accuracy a: Ward's recommended range is 0.1 … 0.2.
 pub const DEFAULT_ACCURACY: f32 = 0.2;
@@ -109,8 +110,8 @@ pub struct CacheReport {
     pub irradiance: IrradianceParams,
     /// Records made.
     pub records: usize,
-    /// Records made per level, coarsest first, with its stride in pixels.
-    pub records_per_level: Vec<(u32, usize)>,
+    /// Records made per level, coarsest first.
+    pub records_per_level: Vec<Level>,
     /// Mean records a surface pixel uses.
     pub mean_records_per_pixel: f64,
     /// Rays cast for the records' E (gather and shadow rays).
@@ -252,6 +253,28 @@ pub fn cache(
     oracle: Option<&HmdImage>,
     progress: &dyn Progress,
 ) -> Result<Cached> {
+    let checked = check(scene, params, options, oracle)?;
+    in_pool(options.threads, || {
+        build(scene, params, options, &checked, progress)
+    })?
+}
+
+/// What a cache is made with, checked before any work: the records' irradiance, the light,
+/// the estimator of H the spacing takes (if one), and the oracle's image.
+struct Checked<'a> {
+    irradiance: Irradiance,
+    light: SpotLight,
+    spacing: Option<Box<dyn Estimator>>,
+    oracle: Option<&'a HmdImage>,
+}
+
+/// Refuses, by name, what cannot make a cache, before anything is built.
+fn check<'a>(
+    scene: &Scene,
+    params: &CacheParams,
+    options: &RenderOptions,
+    oracle: Option<&'a HmdImage>,
+) -> Result<Checked<'a>> {
     options.validate()?;
     scene.validate()?;
     if !(params.accuracy.is_finite() && params.accuracy > 0.0) {
@@ -277,82 +300,113 @@ pub fn cache(
         (_, Some(_)) => return Err(Error::invalid("oracle", "is read only by --spacing oracle")),
         (_, None) => {}
     }
-    let irradiance = params.irradiance.build()?;
-    let light = scene.light.ok_or_else(|| {
-        let message = format!(
-            "a cache of irradiance needs a spot light, and scene '{}' has none: add a [light] to its TOML file",
-            scene.name
-        );
-        Error::invalid("scene", message)
-    })?;
-    let spacing = params.spacing.estimator()?;
+    let light = crate::estimators::irradiance::light_of(scene)?;
     let pixels = w as u64 * h as u64;
-    crate::memory::check(
-        Some("size"),
-        &format!("{w}x{h}"),
-        crate::render::image_bytes(pixels, 2),
-        None,
-    )?;
-    in_pool(options.threads, || {
-        let start = Instant::now();
-        let rays = pixels * (1 + 2 * params.irradiance.rays as u64);
-        let (accel, bvh) = Accel::for_work(&scene.mesh, options.bvh_quality, rays, options.kernel)?;
-        let gbuffer = primary_hits(&accel, scene, w, h);
-        crate::interrupt::check()?;
-        let l_diag = scene.bounds().diagonal();
-        let context = EstimateContext {
-            accel: &accel,
-            scene,
-            seed: options.seed,
-            clamp: DistanceClamp::for_diagonal(l_diag, options.max_distance),
-            aovs: &[],
-            whole_image: true,
-            bvh,
-        };
-        let mut seconds = CacheSeconds {
-            setup: start.elapsed().as_secs_f64(),
-            ..CacheSeconds::default()
-        };
-        let prepare_start = Instant::now();
-        let prepared = match &spacing {
-            Some(estimator) => Some(estimator.prepare(&context, &gbuffer, progress)?),
-            None => None,
-        };
-        seconds.spacing_prepare = prepare_start.elapsed().as_secs_f64();
-        let source = match (prepared, oracle) {
-            (Some(Prepared::Pixels { job, rays, .. }), _) => Source::Job(job, rays.map_or(0, |r| r.cast)),
-            (Some(Prepared::Done(estimate)), _) => {
-                Source::Image(estimate.hmd, estimate.rays.map_or(0, |r| r.cast))
-            }
-            (None, Some(image)) => Source::Image(image.data.clone(), 0),
-            (None, None) => Source::Own,
-        };
-        let placement = Placement {
-            context: &context,
-            gbuffer: &gbuffer,
-            irradiance: &irradiance,
-            light,
-            params,
-            source: &source,
-            pixel_size: 2.0 * (scene.camera.fov_y_deg.to_radians() / 2.0).tan() / h as f32,
-            l_diag,
-        };
-        let (records, index, counts) = placement.place(&mut seconds, progress)?;
-        let interpolate_start = Instant::now();
-        let (image, records_used) = placement.interpolate(&records, &index, progress)?;
-        seconds.interpolate = interpolate_start.elapsed().as_secs_f64();
-        seconds.total = start.elapsed().as_secs_f64();
-        let used: Vec<f64> = records_used
-            .iter()
-            .filter(|u| u.is_finite())
-            .map(|&u| u as f64)
-            .collect();
-        let report = CacheReport {
+    let what = format!("{w}x{h}");
+    crate::memory::check(Some("size"), &what, crate::render::image_bytes(pixels, 2), None)?;
+    Ok(Checked {
+        irradiance: params.irradiance.build()?,
+        light,
+        spacing: params.spacing.estimator()?,
+        oracle,
+    })
+}
+
+/// The cache, on the current pool: the BVH and primary hits, the spacing estimator's
+/// preparation, the records level by level, every pixel's E.
+fn build(
+    scene: &Scene,
+    params: &CacheParams,
+    options: &RenderOptions,
+    checked: &Checked,
+    progress: &dyn Progress,
+) -> Result<Cached> {
+    let start = Instant::now();
+    let (w, h) = (options.width, options.height);
+    let rays = w as u64 * h as u64 * (1 + 2 * params.irradiance.rays as u64);
+    let (accel, bvh) = Accel::for_work(&scene.mesh, options.bvh_quality, rays, options.kernel)?;
+    let gbuffer = primary_hits(&accel, scene, w, h);
+    crate::interrupt::check()?;
+    let l_diag = scene.bounds().diagonal();
+    let context = EstimateContext {
+        accel: &accel,
+        scene,
+        seed: options.seed,
+        clamp: DistanceClamp::for_diagonal(l_diag, options.max_distance),
+        aovs: &[],
+        whole_image: true,
+        bvh,
+    };
+    let mut seconds = CacheSeconds {
+        setup: start.elapsed().as_secs_f64(),
+        ..CacheSeconds::default()
+    };
+    let prepare_start = Instant::now();
+    let prepared = match &checked.spacing {
+        Some(estimator) => Some(estimator.prepare(&context, &gbuffer, progress)?),
+        None => None,
+    };
+    seconds.spacing_prepare = prepare_start.elapsed().as_secs_f64();
+    let source = match (prepared, checked.oracle) {
+        (Some(Prepared::Pixels { job, rays, .. }), _) => Source::Job(job, rays.map_or(0, |r| r.cast)),
+        (Some(Prepared::Done(estimate)), _) => {
+            Source::Image(estimate.hmd, estimate.rays.map_or(0, |r| r.cast))
+        }
+        (None, Some(image)) => Source::Image(image.data.clone(), 0),
+        (None, None) => Source::Own,
+    };
+    let placement = Placement {
+        context: &context,
+        gbuffer: &gbuffer,
+        irradiance: &checked.irradiance,
+        light: checked.light,
+        params,
+        source: &source,
+        pixel_size: 2.0 * (scene.camera.fov_y_deg.to_radians() / 2.0).tan() / h as f32,
+        l_diag,
+    };
+    let (records, index, mut counts) = placement.place(&mut seconds, progress)?;
+    let interpolate_start = Instant::now();
+    let (image, records_used) = placement.interpolate(&records, &index, progress)?;
+    seconds.interpolate = interpolate_start.elapsed().as_secs_f64();
+    seconds.total = start.elapsed().as_secs_f64();
+    counts.rays_h += source.prepared_rays();
+    let report = CacheReport::new(
+        scene,
+        params,
+        options,
+        l_diag,
+        (&records, &records_used),
+        counts,
+        seconds,
+    );
+    Ok(Cached {
+        image: HmdImage::new(w, h, image),
+        records_used,
+        records,
+        report,
+    })
+}
+
+impl CacheReport {
+    /// The report of a cache of `scene` made of `records` (and how many each pixel used),
+    /// which cost `counts` and `seconds`.
+    fn new(
+        scene: &Scene,
+        params: &CacheParams,
+        options: &RenderOptions,
+        l_diag: f32,
+        (records, used): (&[Record], &[f32]),
+        counts: Counts,
+        seconds: CacheSeconds,
+    ) -> CacheReport {
+        let used: Vec<f64> = used.iter().filter(|u| u.is_finite()).map(|&u| u as f64).collect();
+        CacheReport {
             hmdist_version: env!("CARGO_PKG_VERSION").into(),
             method: "cache".into(),
             scene: scene.name.clone(),
-            width: w,
-            height: h,
+            width: options.width,
+            height: options.height,
             seed: options.seed,
             threads: rayon::current_num_threads(),
             l_diag,
@@ -365,17 +419,11 @@ pub fn cache(
             records_per_level: counts.levels,
             mean_records_per_pixel: used.iter().sum::<f64>() / used.len().max(1) as f64,
             rays_e: counts.rays_e,
-            rays_h: counts.rays_h + source.prepared_rays(),
+            rays_h: counts.rays_h,
             seconds,
             reference: None,
-        };
-        Ok(Cached {
-            image: HmdImage::new(w, h, image),
-            records_used,
-            records,
-            report,
-        })
-    })?
+        }
+    }
 }
 
 /// Where the records' H comes from.
@@ -401,17 +449,39 @@ impl Source<'_> {
 /// Records made, per level, and the rays they cast.
 #[derive(Default)]
 struct Counts {
-    levels: Vec<(u32, usize)>,
+    levels: Vec<Level>,
     rays_e: u64,
     rays_h: u64,
+}
+
+/// One placement level: its stride and the records it made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct Level {
+    /// Pixels between the level's grid points.
+    pub stride: u32,
+    /// Records made at this level.
+    pub records: usize,
+}
+
+/// A record's irradiance, what it cast, and what its own rays saw.
+struct Gathered {
+    e: f32,
+    tally: Tally,
+    own: OwnRays,
+}
+
+/// A record's radius from its spacing source (before clamping), and the rays it cost.
+struct Spaced {
+    radius: f32,
+    tally: Tally,
 }
 
 /// What placing records needs.
 struct Placement<'a> {
     context: &'a EstimateContext<'a>,
     gbuffer: &'a GBuffer,
-    irradiance: &'a crate::estimators::Irradiance,
-    light: crate::scene::SpotLight,
+    irradiance: &'a Irradiance,
+    light: SpotLight,
     params: &'a CacheParams,
     source: &'a Source<'a>,
     /// A pixel's footprint per unit of distance from the camera.
@@ -436,93 +506,102 @@ impl Placement<'_> {
         let mut records: Vec<Record> = vec![];
         let mut index = RecordIndex::new(self.params.accuracy, self.l_diag / 256.0);
         let mut counts = Counts::default();
-        let top = top_stride(w, h).trailing_zeros();
-        for level in (0..=top).rev() {
+        for level in (0..=top_stride(w, h).trailing_zeros()).rev() {
             let stride = 1u32 << level;
-            let grid: Vec<u32> = (0..h)
-                .step_by(stride as usize)
-                .flat_map(|y| (0..w).step_by(stride as usize).map(move |x| y * w + x))
-                .collect();
-            let needy: Vec<u32> = grid
-                .into_par_iter()
-                .filter(|&p| {
-                    self.gbuffer.points[p as usize]
-                        .as_ref()
-                        .is_some_and(|hit| !index.covers(&records, p, hit.point, hit.normal))
-                })
-                .collect();
+            let needy = self.uncovered(stride, &records, &index);
             crate::interrupt::check()?;
-            progress.start(&format!("records, stride {stride}"), needy.len() as u64);
             let e_start = Instant::now();
-            let made: Vec<(f32, Tally, OwnRays)> = needy
-                .par_iter()
-                .map(|&p| {
-                    let mut own = OwnRays::new(self.context.clamp);
-                    let (e, tally) = if crate::interrupt::requested() {
-                        (f32::NAN, Tally::default())
-                    } else {
-                        let c = self.context;
-                        let key = (c.seed, p as u64);
-                        let observe = |t, w| own.add(t, w);
-                        self.irradiance
-                            .at(c.accel, &self.light, self.hit(p), key, c.clamp.max, observe)
-                    };
-                    progress.advance(1);
-                    (e, tally, own)
-                })
-                .collect();
-            progress.finish();
-            crate::interrupt::check()?;
+            let gathered = self.gather(&needy, stride, progress)?;
             seconds.e += e_start.elapsed().as_secs_f64();
             let h_start = Instant::now();
-            let radii = self.radii(&needy, &made)?;
+            let spaced = self.radii(&needy, &gathered)?;
             seconds.h += h_start.elapsed().as_secs_f64();
-            for ((&p, (e, tally, _)), (radius, h_tally)) in needy.iter().zip(&made).zip(radii) {
-                counts.rays_e += tally.rays;
-                counts.rays_h += h_tally.rays;
+            for ((&p, gathered), spaced) in needy.iter().zip(&gathered).zip(spaced) {
+                counts.rays_e += gathered.tally.rays;
+                counts.rays_h += spaced.tally.rays;
                 let hit = self.hit(p);
                 let record = Record {
                     pixel: p,
                     point: hit.point,
                     normal: hit.normal,
-                    e: *e,
-                    radius: self.clamped(radius, hit),
+                    e: gathered.e,
+                    radius: self.clamped(spaced.radius, hit),
                     level,
                 };
                 index.insert(records.len() as u32, &record);
                 records.push(record);
             }
-            counts.levels.push((stride, needy.len()));
+            counts.levels.push(Level {
+                stride,
+                records: needy.len(),
+            });
         }
         Ok((records, index, counts))
     }
 
-    /// The records' H (before clamping) at pixels `needy` whose own rays are `made`, and the
-    /// rays each cost beyond them.
-    fn radii(&self, needy: &[u32], made: &[(f32, Tally, OwnRays)]) -> Result<Vec<(f32, Tally)>> {
+    /// The surface pixels of the grid of `stride` that no record covers, in pixel order.
+    fn uncovered(&self, stride: u32, records: &[Record], index: &RecordIndex) -> Vec<u32> {
+        let (w, h) = (self.gbuffer.width, self.gbuffer.height);
+        let grid: Vec<u32> = (0..h)
+            .step_by(stride as usize)
+            .flat_map(|y| (0..w).step_by(stride as usize).map(move |x| y * w + x))
+            .collect();
+        grid.into_par_iter()
+            .filter(|&p| {
+                self.gbuffer.points[p as usize]
+                    .as_ref()
+                    .is_some_and(|hit| !index.covers(records, p, hit.point, hit.normal))
+            })
+            .collect()
+    }
+
+    /// The irradiance at pixels `needy` (the level of `stride`), with what their own rays saw.
+    fn gather(&self, needy: &[u32], stride: u32, progress: &dyn Progress) -> Result<Vec<Gathered>> {
+        progress.start(&format!("records, stride {stride}"), needy.len() as u64);
+        let gathered = needy
+            .par_iter()
+            .map(|&p| {
+                let mut own = OwnRays::new(self.context.clamp);
+                let (e, tally) = if crate::interrupt::requested() {
+                    (f32::NAN, Tally::default())
+                } else {
+                    let c = self.context;
+                    let key = (c.seed, p as u64);
+                    let observe = |t, w| own.add(t, w);
+                    self.irradiance
+                        .at(c.accel, &self.light, self.hit(p), key, c.clamp.max, observe)
+                };
+                progress.advance(1);
+                Gathered { e, tally, own }
+            })
+            .collect();
+        progress.finish();
+        crate::interrupt::check()?;
+        Ok(gathered)
+    }
+
+    /// The records' radii (before clamping) at pixels `needy` whose own rays are in
+    /// `gathered`, and the rays each cost beyond them.
+    fn radii(&self, needy: &[u32], gathered: &[Gathered]) -> Result<Vec<Spaced>> {
         let spacing = &self.params.spacing;
-        let own = |i: usize| made[i].2;
-        let found: Vec<(f32, Tally)> = match self.source {
-            Source::Own => (0..needy.len())
-                .map(|i| {
-                    (
-                        own(i).radius(spacing).expect("a source of the own rays"),
-                        Tally::default(),
-                    )
-                })
-                .collect(),
-            Source::Image(hmd, _) => needy
+        let free = |radius| Spaced {
+            radius,
+            tally: Tally::default(),
+        };
+        let found: Vec<Spaced> = match self.source {
+            Source::Own => gathered
                 .iter()
-                .map(|&p| (hmd[p as usize], Tally::default()))
+                .map(|g| free(g.own.radius(spacing).expect("a source of the own rays")))
                 .collect(),
+            Source::Image(hmd, _) => needy.iter().map(|&p| free(hmd[p as usize])).collect(),
             Source::Job(job, _) => needy
                 .par_iter()
                 .map_init(
                     || job.worker(&Silent),
                     |worker, &p| {
                         let (mut tally, mut aov) = (Tally::default(), AovSample::default());
-                        let hmd = worker.pixel(self.hit(p), p as u64, &mut tally, &mut aov);
-                        (hmd, tally)
+                        let radius = worker.pixel(self.hit(p), p as u64, &mut tally, &mut aov);
+                        Spaced { radius, tally }
                     },
                 )
                 .collect(),
@@ -531,8 +610,15 @@ impl Placement<'_> {
         // No H from the source (a photon-map hole): the record's own rays'.
         Ok(found
             .into_iter()
-            .enumerate()
-            .map(|(i, (r, tally))| (if r.is_nan() { own(i).hmd() } else { r }, tally))
+            .zip(gathered)
+            .map(|(spaced, g)| Spaced {
+                radius: if spaced.radius.is_nan() {
+                    g.own.hmd()
+                } else {
+                    spaced.radius
+                },
+                ..spaced
+            })
             .collect())
     }
 

@@ -12,7 +12,7 @@ mod records;
 mod spacing;
 
 pub use build::{
-    cache, top_stride, CacheErrors, CacheParams, CacheReport, CacheSeconds, Cached, DEFAULT_ACCURACY,
+    cache, top_stride, CacheErrors, CacheParams, CacheReport, CacheSeconds, Cached, Level, DEFAULT_ACCURACY,
 };
 pub use records::{interpolate, Record};
 pub use spacing::{Range, Spacing};

@@ -72,33 +72,7 @@ pub struct CacheArgs {
 }
 
 pub fn run(args: CacheArgs) -> Result<()> {
-    let params = CacheParams {
-        irradiance: args.irradiance.clone(),
-        accuracy: args.accuracy,
-        spacing: Spacing::parse(&args.spacing)?,
-        clamp_pixels: args
-            .clamp_pixels
-            .as_deref()
-            .map(|t| Range::parse("clamp_pixels", t))
-            .transpose()?,
-        clamp_scene: args
-            .clamp_scene
-            .as_deref()
-            .map(|t| Range::parse("clamp_scene", t))
-            .transpose()?,
-    };
-    if let Some(s) = args.scale.filter(|s| !(s.is_finite() && *s > 0.0)) {
-        return Err(Error::invalid(
-            "scale",
-            format!("must be a positive number, not {s}"),
-        ));
-    }
-    if args.diff_png.is_some() && args.reference.is_none() {
-        return Err(Error::invalid(
-            "diff_png",
-            "needs --reference: the error is against it",
-        ));
-    }
+    let params = args.params()?;
     let options = hmdist::render::RenderOptions {
         max_distance: args.max_distance,
         ..args.image.options()?
@@ -145,42 +119,69 @@ pub fn run(args: CacheArgs) -> Result<()> {
         (Some(image), Some(path)) => Some(cached.compare(image, &path.display().to_string())?),
         _ => None,
     };
-
-    let (w, h) = size;
-    let channels: [(&str, &[f32]); 2] = [
-        (exr::IRRADIANCE_CHANNEL, &cached.image.data),
-        ("records", &cached.records_used),
-    ];
-    let exr_bytes = exr::encode_channels(&channels, size, &args.out)?;
-    let scale = args
-        .scale
-        .unwrap_or_else(|| irradiance::display_scale(cached.report.l_diag));
-    let mut picture: RgbImage =
-        image::DynamicImage::ImageLuma8(picture::grey(&cached.image, scale)).to_rgb8();
-    for record in &cached.records {
-        picture.put_pixel(record.pixel % w, record.pixel / w, Rgb([230, 30, 30]));
-    }
     let mut contents = vec![
-        exr_bytes,
-        picture::encode_png(&picture, &png)?,
+        exr::encode_channels(
+            &[
+                (exr::IRRADIANCE_CHANNEL, &cached.image.data[..]),
+                ("records", &cached.records_used[..]),
+            ],
+            size,
+            &args.out,
+        )?,
+        picture::encode_png(&args.picture(&cached), &png)?,
         cached.report.to_json().into_bytes(),
     ];
     if let (Some(path), Some(errors)) = (&args.diff_png, &errors) {
+        let (w, h) = size;
         let colours =
             picture::false_colour_scaled(errors, w, h, "relative error", picture::ColourScale::Linear);
         contents.push(picture::encode_png(&colours, path)?);
     }
     outputs.commit(&contents.iter().map(|c| c.as_slice()).collect::<Vec<_>>())?;
     if !args.quiet {
-        println!(
-            "{} -> {}, {}, {}",
-            cached.report.summary(),
-            args.out.display(),
-            png.display(),
-            json.display()
-        );
+        let files = format!("{}, {}, {}", args.out.display(), png.display(), json.display());
+        println!("{} -> {files}", cached.report.summary());
     }
     Ok(())
+}
+
+impl CacheArgs {
+    /// The cache's parameters from the flags, checked (a bad source, clamp, scale or a
+    /// `--diff-png` without a reference is refused by name).
+    fn params(&self) -> Result<CacheParams> {
+        if let Some(s) = self.scale.filter(|s| !(s.is_finite() && *s > 0.0)) {
+            let message = format!("must be a positive number, not {s}");
+            return Err(Error::invalid("scale", message));
+        }
+        if self.diff_png.is_some() && self.reference.is_none() {
+            return Err(Error::invalid(
+                "diff_png",
+                "needs --reference: the error is against it",
+            ));
+        }
+        let range = |name, text: &Option<String>| text.as_deref().map(|t| Range::parse(name, t)).transpose();
+        Ok(CacheParams {
+            irradiance: self.irradiance.clone(),
+            accuracy: self.accuracy,
+            spacing: Spacing::parse(&self.spacing)?,
+            clamp_pixels: range("clamp_pixels", &self.clamp_pixels)?,
+            clamp_scene: range("clamp_scene", &self.clamp_scene)?,
+        })
+    }
+
+    /// The PNG: E in grey at `--scale` (by default irradiance's), each record's pixel red.
+    fn picture(&self, cached: &hmdist::cache::Cached) -> RgbImage {
+        let scale = self
+            .scale
+            .unwrap_or_else(|| irradiance::display_scale(cached.report.l_diag));
+        let grey = picture::grey(&cached.image, scale);
+        let mut picture = image::DynamicImage::ImageLuma8(grey).to_rgb8();
+        let width = cached.image.width;
+        for record in &cached.records {
+            picture.put_pixel(record.pixel % width, record.pixel / width, Rgb([230, 30, 30]));
+        }
+        picture
+    }
 }
 
 /// Channel `channel` of the EXR at `path` (`--oracle` or `--reference`, named `flag`), checked

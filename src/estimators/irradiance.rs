@@ -55,7 +55,7 @@ pub fn display_scale(l_diag: f32) -> f32 {
 #[serde(default, deny_unknown_fields)]
 #[cfg_attr(feature = "cli", derive(clap::Args))]
 pub struct IrradianceParams {
-    /// Gather rays per pixel M.
+    /// Gather rays M per pixel (per record, for `hmdist cache`).
     #[cfg_attr(feature = "cli", arg(long, default_value_t = DEFAULT_RAYS))]
     pub rays: u32,
     /// Direction weighting over the hemisphere.
@@ -64,7 +64,7 @@ pub struct IrradianceParams {
     /// How the directions fill the hemisphere.
     #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Sampler::Sobol))]
     pub sampler: Sampler,
-    /// Absorption a of every surface: reflectance ρ = 1 − a.
+    /// Absorption of every surface: its reflectance is ρ = 1 − absorption.
     #[cfg_attr(feature = "cli", arg(long, default_value_t = DEFAULT_ABSORPTION))]
     pub absorption: f32,
 }
@@ -157,6 +157,17 @@ impl Irradiance {
     }
 }
 
+/// The scene's spot light, which irradiance needs: a scene without one is refused by name.
+pub(crate) fn light_of(scene: &crate::scene::Scene) -> Result<SpotLight> {
+    scene.light.ok_or_else(|| {
+        let message = format!(
+            "'{}' has no spot light, and irradiance needs one: add a [light] to its TOML file",
+            scene.name
+        );
+        Error::invalid("scene", message)
+    })
+}
+
 /// The direct irradiance at `hit` from `light` on the side its normal faces (the module's
 /// `E_d`), and the shadow rays cast for it (0 or 1).
 pub(crate) fn direct_irradiance<R: RayCaster>(accel: &R, light: &SpotLight, hit: &Hit) -> (f32, u64) {
@@ -207,13 +218,7 @@ impl Estimator for Irradiance {
         _: &'a GBuffer,
         _: &dyn Progress,
     ) -> Result<Prepared<'a>> {
-        let light = context.scene.light.ok_or_else(|| {
-            let message = format!(
-                "irradiance needs a spot light, and scene '{}' has none: add a [light] to its TOML file",
-                context.scene.name
-            );
-            Error::invalid("method", message)
-        })?;
+        let light = light_of(context.scene)?;
         Ok(Prepared::Pixels {
             job: Box::new(IrradiancePixels {
                 irradiance: self,
