@@ -4,7 +4,7 @@
 //! renderer's rule (pbrt-v2's, Mitsuba's), and every pixel's E interpolated from the records
 //! that cover it: so that an estimator of H is judged by the cache it makes.
 //!
-//! `records.rs` holds the records, Ward's weight and the grid that finds them; `spacing.rs`
+//! `records.rs` holds the records, Ward's weight and the grids that find them; `spacing.rs`
 //! where a radius comes from; `build.rs` the placement, the interpolation and the report.
 
 mod build;

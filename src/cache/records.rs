@@ -1,4 +1,4 @@
-//! An irradiance cache's records, Ward's weight, and a grid that finds the records covering a
+//! An irradiance cache's records, Ward's weight, and the grids that find the records covering a
 //! point.
 
 use std::collections::HashMap;
@@ -39,56 +39,71 @@ impl Record {
     }
 }
 
-/// A sphere reaching over more cells than this goes to the list every query reads.
-const MOST_CELLS: f64 = 4096.0;
+/// Cell sides double from one grid to the next: a record goes to the first grid whose cells
+/// are at least its reach, so its sphere overlaps at most 2 × 2 × 2 of them.
+const GRIDS: usize = 48;
 
-/// The records in a uniform grid: each in every cell its sphere of influence (radius
-/// `a · R_i`, outside which ε_i ≥ a) overlaps, or, where that is too many cells, in a list
-/// every query reads. Lookups are in record order, so sums over them do not depend on threads.
+/// The records in a stack of uniform grids, cells of side `cell · 2^k` in grid k: each record
+/// in the cells of its grid that its sphere of influence (radius `a · R_i`, outside which
+/// ε_i ≥ a) overlaps, and a record that reaches everywhere (R_i = +inf) in a list every query
+/// reads. A query reads one cell per grid; lookups are in record order, so sums over them do
+/// not depend on threads.
 pub(crate) struct RecordIndex {
     accuracy: f32,
     cell: f32,
-    cells: HashMap<[i32; 3], Vec<u32>>,
+    grids: Vec<HashMap<[i32; 3], Vec<u32>>>,
     everywhere: Vec<u32>,
 }
 
 impl RecordIndex {
-    /// An empty index for accuracy `a`, with cells of side `cell`.
+    /// An empty index for accuracy `a`, with cells of side `cell` in its finest grid.
     pub fn new(accuracy: f32, cell: f32) -> Self {
         RecordIndex {
             accuracy,
             cell,
-            cells: HashMap::new(),
+            grids: vec![],
             everywhere: vec![],
         }
     }
 
-    fn cell_of(&self, p: Vec3) -> [i32; 3] {
+    fn cell_of(&self, grid: usize, p: Vec3) -> [i32; 3] {
         // `as` saturates: a point far outside the scene lands in an edge cell.
-        (p / self.cell).floor().to_array().map(|c| c as i32)
+        (p / (self.cell * (1u64 << grid) as f32))
+            .floor()
+            .to_array()
+            .map(|c| c as i32)
     }
 
     /// Adds record `id` (its ids must grow with each insert).
     pub fn insert(&mut self, id: u32, record: &Record) {
         let reach = self.accuracy * record.radius;
-        if !reach.is_finite() {
+        let grid = (0..GRIDS).find(|&k| self.cell * (1u64 << k) as f32 >= reach);
+        let Some(grid) = grid.filter(|_| reach.is_finite()) else {
             self.everywhere.push(id);
             return;
+        };
+        if self.grids.len() <= grid {
+            self.grids.resize_with(grid + 1, HashMap::new);
         }
-        let lo = self.cell_of(record.point - Vec3::splat(reach));
-        let hi = self.cell_of(record.point + Vec3::splat(reach));
-        let cells: f64 = (0..3).map(|k| (hi[k] as f64 - lo[k] as f64) + 1.0).product();
-        if cells > MOST_CELLS {
-            self.everywhere.push(id);
-            return;
-        }
+        let lo = self.cell_of(grid, record.point - Vec3::splat(reach));
+        let hi = self.cell_of(grid, record.point + Vec3::splat(reach));
         for x in lo[0]..=hi[0] {
             for y in lo[1]..=hi[1] {
                 for z in lo[2]..=hi[2] {
-                    self.cells.entry([x, y, z]).or_default().push(id);
+                    self.grids[grid].entry([x, y, z]).or_default().push(id);
                 }
             }
         }
+    }
+
+    /// The records that may cover `point`: one cell of each grid, then the list.
+    fn near(&self, point: Vec3) -> impl Iterator<Item = u32> + '_ {
+        let cells = self
+            .grids
+            .iter()
+            .enumerate()
+            .filter_map(move |(k, grid)| grid.get(&self.cell_of(k, point)));
+        cells.flatten().chain(&self.everywhere).copied()
     }
 
     /// The records pixel `pixel`'s point uses (ε < a), as (id, ε) in id order, into `out`.
@@ -101,8 +116,7 @@ impl RecordIndex {
         out: &mut Vec<(u32, f32)>,
     ) {
         out.clear();
-        let cell = self.cells.get(&self.cell_of(point));
-        for &id in cell.into_iter().flatten().chain(&self.everywhere) {
+        for id in self.near(point) {
             let error = records[id as usize].error(pixel, point, normal);
             if error < self.accuracy {
                 out.push((id, error));
@@ -113,11 +127,8 @@ impl RecordIndex {
 
     /// Whether any record covers pixel `pixel`'s point.
     pub fn covers(&self, records: &[Record], pixel: u32, point: Vec3, normal: Vec3) -> bool {
-        let cell = self.cells.get(&self.cell_of(point));
-        cell.into_iter()
-            .flatten()
-            .chain(&self.everywhere)
-            .any(|&id| records[id as usize].error(pixel, point, normal) < self.accuracy)
+        self.near(point)
+            .any(|id| records[id as usize].error(pixel, point, normal) < self.accuracy)
     }
 }
 
