@@ -15,8 +15,8 @@ use hmdist::scene::Scene;
 
 const SIZE: &str = "64x48";
 
-/// `irradiance` and `cache` of `cube` at [`SIZE`] with 16 rays.
-fn irradiance(dir: &Scratch, out: &str) {
+/// `render --method irradiance` of `scene` at `size` with `rays` rays, into `out`.
+fn irradiance(dir: &Scratch, out: &str, (scene, size, rays): (&str, &str, &str)) {
     hmdist_ok(
         dir.path(),
         &[
@@ -24,10 +24,12 @@ fn irradiance(dir: &Scratch, out: &str) {
             "--quiet",
             "--method",
             "irradiance",
+            "--scene",
+            scene,
             "--size",
-            SIZE,
+            size,
             "--rays",
-            "16",
+            rays,
             "--out",
             out,
         ],
@@ -43,7 +45,7 @@ fn cache_args<'a>(out: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
 #[test]
 fn a_tiny_accuracy_gives_every_pixel_its_own_record_and_the_brute_force_image() {
     let dir = Scratch::new("cache-limit");
-    irradiance(&dir, "e.exr");
+    irradiance(&dir, "e.exr", ("cube", SIZE, "16"));
     hmdist_ok(
         dir.path(),
         &cache_args("c.exr", &["--accuracy", "1e-9", "--reference", "e.exr"]),
@@ -169,38 +171,8 @@ fn bad_input_is_refused_by_name() {
     }
     // A reference of another size, and of another scene.
     let dir = Scratch::new("cache-reference");
-    hmdist_ok(
-        dir.path(),
-        &[
-            "render",
-            "--quiet",
-            "--method",
-            "irradiance",
-            "--size",
-            "16x12",
-            "--rays",
-            "4",
-            "--out",
-            "small.exr",
-        ],
-    );
-    hmdist_ok(
-        dir.path(),
-        &[
-            "render",
-            "--quiet",
-            "--method",
-            "irradiance",
-            "--scene",
-            "hall",
-            "--size",
-            SIZE,
-            "--rays",
-            "4",
-            "--out",
-            "hall.exr",
-        ],
-    );
+    irradiance(&dir, "small.exr", ("cube", "16x12", "4"));
+    irradiance(&dir, "hall.exr", ("hall", SIZE, "4"));
     for (reference, says) in [
         ("small.exr", "16x12, the cache 64x48"),
         ("hall.exr", "scene 'hall'"),

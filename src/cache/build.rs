@@ -22,6 +22,7 @@ use super::records::{interpolate, Record, RecordIndex};
 use super::spacing::{OwnRays, Range, Spacing};
 use crate::accel::{Accel, Hit};
 use crate::error::{Error, Result};
+use crate::estimators::irradiance::Spot;
 use crate::estimators::{
     AovSample, DistanceClamp, EstimateContext, Estimator, GBuffer, Irradiance, IrradianceParams, PixelJob,
     Prepared, Tally,
@@ -30,7 +31,7 @@ use crate::image::HmdImage;
 use crate::options::{in_pool, RenderOptions};
 use crate::progress::{Progress, Silent};
 use crate::render::primary_hits;
-use crate::scene::{Scene, SpotLight};
+use crate::scene::Scene;
 
 /// Default accuracy a: Ward's recommended range is 0.1 … 0.2.
 pub const DEFAULT_ACCURACY: f32 = 0.2;
@@ -263,7 +264,7 @@ pub fn cache(
 /// the estimator of H the spacing takes (if one), and the oracle's image.
 struct Checked<'a> {
     irradiance: Irradiance,
-    light: SpotLight,
+    light: Spot,
     spacing: Option<Box<dyn Estimator>>,
     oracle: Option<&'a HmdImage>,
 }
@@ -481,7 +482,7 @@ struct Placement<'a> {
     context: &'a EstimateContext<'a>,
     gbuffer: &'a GBuffer,
     irradiance: &'a Irradiance,
-    light: SpotLight,
+    light: Spot,
     params: &'a CacheParams,
     source: &'a Source<'a>,
     /// A pixel's footprint per unit of distance from the camera.

@@ -294,7 +294,9 @@ mod tests {
             normal: Vec3::Z,
         };
         let mut own = OwnRays::new(DistanceClamp::for_diagonal(400.0, None));
-        irradiance.at(&accel, &light, &hit, (1, 7), f32::INFINITY, |t, w| own.add(t, w));
+        irradiance.at(&accel, &light.into(), &hit, (1, 7), f32::INFINITY, |t, w| {
+            own.add(t, w)
+        });
         let min = own.radius(&Spacing::Min).unwrap();
         assert!((0.1 * 0.9999..0.1 * 1.01).contains(&min), "min {min}");
         let limit = 0.2 / 10f32.to_radians().cos();

@@ -174,14 +174,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
     rendered.report.add_load_seconds(load_seconds);
 
     // The JSON records the PNG's scale, so that `merge` draws the merged PNG the same way.
-    let channel = estimator.channel();
-    let scale = args.scale.unwrap_or(if channel == exr::IRRADIANCE_CHANNEL {
-        hmdist::estimators::irradiance::display_scale(rendered.report.l_diag)
-    } else {
-        scene.display_scale
-    });
+    let scale = args.scale.unwrap_or_else(|| estimator.display_scale(&scene));
     rendered.report.display_scale = scale;
-    let exr_bytes = exr::encode_as(channel, &rendered.image, &rendered.aovs, &args.out)?;
+    let exr_bytes = exr::encode_as(estimator.channel(), &rendered.image, &rendered.aovs, &args.out)?;
     let png_bytes = picture::encode_png(&picture::grey(&rendered.image, scale), &png)?;
     let mut contents = vec![exr_bytes, png_bytes, rendered.report.to_json().into_bytes()];
     for (aov, path) in &pictures {

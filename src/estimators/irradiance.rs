@@ -105,11 +105,6 @@ pub struct Irradiance {
 }
 
 impl Irradiance {
-    /// The parameters it was built from.
-    pub fn params(&self) -> &IrradianceParams {
-        &self.params
-    }
-
     /// The surfaces' reflectance ρ.
     pub fn reflectance(&self) -> f32 {
         1.0 - self.params.absorption
@@ -122,7 +117,7 @@ impl Irradiance {
     pub(crate) fn at<R: RayCaster>(
         &self,
         accel: &R,
-        light: &SpotLight,
+        light: &Spot,
         hit: &Hit,
         (seed, key): (u64, u64),
         t_max: f32,
@@ -157,9 +152,30 @@ impl Irradiance {
     }
 }
 
+/// A spot light as the direct irradiance reads it, its cone's cosine worked out once (not per
+/// ray).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Spot {
+    position: Vec3,
+    direction: Vec3,
+    /// Cosine of the cone's half angle: a direction from the light lies inside when its cosine
+    /// with the axis is at least this.
+    cone_cos: f32,
+}
+
+impl From<SpotLight> for Spot {
+    fn from(light: SpotLight) -> Spot {
+        Spot {
+            position: light.position,
+            direction: light.direction,
+            cone_cos: light.cone_half_angle_deg.to_radians().cos(),
+        }
+    }
+}
+
 /// The scene's spot light, which irradiance needs: a scene without one is refused by name.
-pub(crate) fn light_of(scene: &crate::scene::Scene) -> Result<SpotLight> {
-    scene.light.ok_or_else(|| {
+pub(crate) fn light_of(scene: &crate::scene::Scene) -> Result<Spot> {
+    scene.light.map(Spot::from).ok_or_else(|| {
         let message = format!(
             "'{}' has no spot light, and irradiance needs one: add a [light] to its TOML file",
             scene.name
@@ -170,7 +186,7 @@ pub(crate) fn light_of(scene: &crate::scene::Scene) -> Result<SpotLight> {
 
 /// The direct irradiance at `hit` from `light` on the side its normal faces (the module's
 /// `E_d`), and the shadow rays cast for it (0 or 1).
-pub(crate) fn direct_irradiance<R: RayCaster>(accel: &R, light: &SpotLight, hit: &Hit) -> (f32, u64) {
+pub(crate) fn direct_irradiance<R: RayCaster>(accel: &R, light: &Spot, hit: &Hit) -> (f32, u64) {
     let to_light = light.position - hit.point;
     let r2 = to_light.length_squared();
     if r2 == 0.0 || !r2.is_finite() {
@@ -178,8 +194,7 @@ pub(crate) fn direct_irradiance<R: RayCaster>(accel: &R, light: &SpotLight, hit:
     }
     let l = to_light / r2.sqrt();
     let cos_y = hit.normal.dot(l);
-    let cone_cos = light.cone_half_angle_deg.to_radians().cos();
-    if cos_y <= 0.0 || (-l).dot(light.direction) < cone_cos {
+    if cos_y <= 0.0 || (-l).dot(light.direction) < light.cone_cos {
         return (0.0, 0);
     }
     let origin = hit.spawn_origin(l);
@@ -197,6 +212,10 @@ impl Estimator for Irradiance {
 
     fn channel(&self) -> &'static str {
         CHANNEL
+    }
+
+    fn display_scale(&self, scene: &crate::scene::Scene) -> f32 {
+        display_scale(scene.bounds().diagonal())
     }
 
     fn parameters(&self) -> Parameters {
@@ -235,7 +254,7 @@ impl Estimator for Irradiance {
 struct IrradiancePixels<'a> {
     irradiance: &'a Irradiance,
     context: &'a EstimateContext<'a>,
-    light: SpotLight,
+    light: Spot,
 }
 
 impl PixelJob for IrradiancePixels<'_> {
@@ -387,7 +406,7 @@ mod tests {
                 .map(|key| {
                     let (e, tally) = irradiance.at(
                         &accel,
-                        &light_at(h),
+                        &light_at(h).into(),
                         &floor_point(0.0, 0.0),
                         (1, key),
                         f32::INFINITY,
@@ -413,7 +432,7 @@ mod tests {
         let irradiance = estimator(1_024, Weighting::Cosine);
         let (e, _) = irradiance.at(
             &accel,
-            &light_at(1.5),
+            &light_at(1.5).into(),
             &floor_point(0.0, 0.0),
             (1, 0),
             f32::INFINITY,
@@ -429,7 +448,7 @@ mod tests {
         };
         let (e, _) = irradiance.at(
             &accel,
-            &down,
+            &down.into(),
             &floor_point(0.0, 0.0),
             (1, 0),
             f32::INFINITY,
@@ -439,7 +458,7 @@ mod tests {
         // Gathered only within a max distance shorter than the ceiling's: nothing is met.
         let (e, tally) = irradiance.at(
             &accel,
-            &light_at(0.5),
+            &light_at(0.5).into(),
             &floor_point(0.0, 0.0),
             (1, 0),
             0.9,
@@ -450,7 +469,7 @@ mod tests {
 
     #[test]
     fn direct_irradiance_is_the_inverse_square_law_unless_shadowed() {
-        let light = light_at(0.5);
+        let light = Spot::from(light_at(0.5));
         let open = planes(|_| {});
         let (e, rays) = direct_irradiance(&open, &light, &floor_point(0.0, 0.0));
         assert_eq!((e, rays), (1.0 / 0.25, 1));

@@ -245,6 +245,12 @@ pub trait Estimator: Sync {
         HMD_CHANNEL
     }
 
+    /// The grey picture's default scale for an image of `scene` (grey = clamp(scale · value)):
+    /// the scene's own for H (SPEC §4); `irradiance` scales by the scene's size.
+    fn display_scale(&self, scene: &crate::scene::Scene) -> f32 {
+        scene.display_scale
+    }
+
     /// The AOVs it can measure; asking for another is refused before the render.
     fn aovs(&self) -> &'static [Aov] {
         &[]

@@ -103,15 +103,11 @@ fn decode_named(bytes: &[u8], path: &Path, name: &str, only_channel_will_do: boo
     })?;
     let layer = &image.layer_data;
     let channels = &layer.channel_data.list;
-    let channel = channels
-        .iter()
-        .find(|c| c.name.eq(name))
-        .or_else(|| {
-            let irradiance = only_channel_will_do && name == CHANNEL;
-            channels
-                .iter()
-                .find(|c| irradiance && c.name.eq(IRRADIANCE_CHANNEL))
-        })
+    let named = |n: &str| channels.iter().find(|c| c.name.eq(n));
+    // An image of irradiance has E where an image of H has Y.
+    let irradiance = only_channel_will_do && name == CHANNEL;
+    let channel = named(name)
+        .or_else(|| irradiance.then(|| named(IRRADIANCE_CHANNEL)).flatten())
         .or(if only_channel_will_do && channels.len() == 1 {
             channels.first()
         } else {
