@@ -216,7 +216,7 @@ class Scene:
         `pixel`, `e`, `radius`, `level`, and per pixel `used` and, with `reference`,
         `relative_error`). `params`: `accuracy` (Ward's a, 0.2), `spacing` ("hmd",
         "hmd:METHOD[:NAME=VALUE,...]", "min", "min10", "oracle"), `clamp_pixels` and
-        `clamp_scene` ((lo, hi)), the records' irradiance (rays, weighting, sampler,
+        `clamp_scene` ((lo, hi)), `neighbour_clamp` and `gradients` (bools), the records' irradiance (rays, weighting, sampler,
         absorption) and the render's own (size, seed, threads, max_distance, bvh). `oracle`:
         an image of H for spacing "oracle"; `reference`: an image of E to measure the cache's
         error against (both float32 [height, width], as `render` and `irradiance` give)."""

@@ -361,7 +361,7 @@ impl PyScene {
     /// (records each pixel used) and, with `reference`, `relative_error` (float32 [height,
     /// width]). `params`: the render's own (size, seed, threads, max_distance, bvh),
     /// irradiance's (rays, weighting, sampler, absorption) and the cache's (accuracy, spacing,
-    /// clamp_pixels, clamp_scene); `oracle` and `reference` are float32 [height, width] images
+    /// clamp_pixels, clamp_scene, neighbour_clamp, gradients); `oracle` and `reference` are float32 [height, width] images
     /// of H and of E.
     #[pyo3(signature = (camera, params, progress, oracle = None, reference = None))]
     fn cache<'py>(
@@ -380,6 +380,8 @@ impl PyScene {
             let bad = |e: PyErr| value_error(format!("{key}: {e}"));
             match key.as_str() {
                 "accuracy" => cache_params.accuracy = value.extract().map_err(bad)?,
+                "gradients" => cache_params.gradients = value.extract().map_err(bad)?,
+                "neighbour_clamp" => cache_params.neighbour_clamp = value.extract().map_err(bad)?,
                 "spacing" => {
                     let text: String = value.extract().map_err(bad)?;
                     cache_params.spacing = Spacing::parse(&text).map_err(py_error)?;

@@ -85,6 +85,10 @@ def test_cache_returns_its_records_and_a_tiny_accuracy_gives_the_irradiance_imag
     C, report, records = s.cache(size=(20, 16), rays=16, spacing="min10", clamp_pixels=(2.5, 15))
     assert report["spacing"] == "min10" and report["clamp_pixels"] == {"lo": 2.5, "hi": 15.0}
     assert 0 < report["records"] < 20 * 16 and C.shape == (16, 20)
+    G, report, _ = s.cache(size=(20, 16), rays=16, gradients=True, neighbour_clamp=True)
+    assert report["gradients"] and report["neighbour_clamp"] and np.all(np.isfinite(G))
+    with pytest.raises(ValueError, match="power of two"):
+        s.cache(size=(20, 16), rays=12, gradients=True)
     with pytest.raises(ValueError, match="oracle"):
         s.cache(size=(20, 16), spacing="oracle")
     with pytest.raises(ValueError, match="is not one of"):

@@ -18,9 +18,11 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use super::gradients::{GradientRays, Gradients};
+use super::neighbours::Neighbours;
 use super::records::{interpolate, Record, RecordIndex};
 use super::spacing::{OwnRays, Range, Spacing};
-use crate::accel::{Accel, Hit};
+use crate::accel::{Accel, GatherStart, Hit};
 use crate::error::{Error, Result};
 use crate::estimators::irradiance::Spot;
 use crate::estimators::{
@@ -49,6 +51,10 @@ pub struct CacheParams {
     pub clamp_pixels: Option<Range>,
     /// Clamp of the radius, in fractions of `l_diag` (Mitsuba: 0.005, 0.32).
     pub clamp_scene: Option<Range>,
+    /// Křivánek's neighbour clamping of the radii ([`super::neighbours`]).
+    pub neighbour_clamp: bool,
+    /// Ward and Heckbert's gradients in the interpolation ([`super::gradients`]).
+    pub gradients: bool,
 }
 
 impl Default for CacheParams {
@@ -59,6 +65,8 @@ impl Default for CacheParams {
             spacing: Spacing::Hmd,
             clamp_pixels: None,
             clamp_scene: None,
+            neighbour_clamp: false,
+            gradients: false,
         }
     }
 }
@@ -107,6 +115,10 @@ pub struct CacheReport {
     pub clamp_pixels: Option<Range>,
     /// The scene clamp, `[lo, hi]` in fractions of `l_diag`.
     pub clamp_scene: Option<Range>,
+    /// Whether the radii were clamped by their neighbours'.
+    pub neighbour_clamp: bool,
+    /// Whether the records carried gradients.
+    pub gradients: bool,
     /// The records' irradiance parameters.
     pub irradiance: IrradianceParams,
     /// Records made.
@@ -302,6 +314,9 @@ fn check<'a>(
         (_, None) => {}
     }
     let light = crate::estimators::irradiance::light_of(scene)?;
+    if params.gradients {
+        super::gradients::check(&params.irradiance)?;
+    }
     let pixels = w as u64 * h as u64;
     let what = format!("{w}x{h}");
     crate::memory::check(Some("size"), &what, crate::render::image_bytes(pixels, 2), None)?;
@@ -415,6 +430,8 @@ impl CacheReport {
             spacing: params.spacing.name(),
             clamp_pixels: params.clamp_pixels,
             clamp_scene: params.clamp_scene,
+            neighbour_clamp: params.neighbour_clamp,
+            gradients: params.gradients,
             irradiance: params.irradiance.clone(),
             records: records.len(),
             records_per_level: counts.levels,
@@ -464,17 +481,26 @@ pub struct Level {
     pub records: usize,
 }
 
-/// A record's irradiance, what it cast, and what its own rays saw.
+/// A record's irradiance, what it cast, what its own rays saw, and its gradients where asked.
 struct Gathered {
     e: f32,
     tally: Tally,
     own: OwnRays,
+    gradients: Option<Gradients>,
 }
 
 /// A record's radius from its spacing source (before clamping), and the rays it cost.
 struct Spaced {
     radius: f32,
     tally: Tally,
+}
+
+/// The records placed so far, and what finds them.
+struct Placed {
+    records: Vec<Record>,
+    index: RecordIndex,
+    neighbours: Neighbours,
+    counts: Counts,
 }
 
 /// What placing records needs.
@@ -497,47 +523,83 @@ impl Placement<'_> {
             .expect("a surface pixel")
     }
 
-    /// Every level's records, coarse to fine, and the index over them.
+    /// Every level's records, coarse to fine, and the index over them. Neighbour clamping
+    /// can shrink a record after a pixel was found covered by it, so with it the finest level
+    /// goes on until no pixel is left uncovered.
     fn place(
         &self,
         seconds: &mut CacheSeconds,
         progress: &dyn Progress,
     ) -> Result<(Vec<Record>, RecordIndex, Counts)> {
         let (w, h) = (self.gbuffer.width, self.gbuffer.height);
-        let mut records: Vec<Record> = vec![];
-        let mut index = RecordIndex::new(self.params.accuracy, self.l_diag / 256.0);
-        let mut counts = Counts::default();
+        let mut placed = Placed {
+            records: vec![],
+            index: RecordIndex::new(self.params.accuracy, self.l_diag / 256.0),
+            neighbours: Neighbours::new(self.l_diag / 64.0),
+            counts: Counts::default(),
+        };
         for level in (0..=top_stride(w, h).trailing_zeros()).rev() {
             let stride = 1u32 << level;
-            let needy = self.uncovered(stride, &records, &index);
-            crate::interrupt::check()?;
-            let e_start = Instant::now();
-            let gathered = self.gather(&needy, stride, progress)?;
-            seconds.e += e_start.elapsed().as_secs_f64();
-            let h_start = Instant::now();
-            let spaced = self.radii(&needy, &gathered)?;
-            seconds.h += h_start.elapsed().as_secs_f64();
-            for ((&p, gathered), spaced) in needy.iter().zip(&gathered).zip(spaced) {
-                counts.rays_e += gathered.tally.rays;
-                counts.rays_h += spaced.tally.rays;
-                let hit = self.hit(p);
-                let record = Record {
-                    pixel: p,
-                    point: hit.point,
-                    normal: hit.normal,
-                    e: gathered.e,
-                    radius: self.clamped(spaced.radius, hit),
-                    level,
-                };
-                index.insert(records.len() as u32, &record);
-                records.push(record);
+            let mut made = 0;
+            loop {
+                let needy = self.uncovered(stride, &placed.records, &placed.index);
+                crate::interrupt::check()?;
+                self.add(&mut placed, &needy, (stride, level), seconds, progress)?;
+                made += needy.len();
+                if needy.is_empty() || level > 0 || !self.params.neighbour_clamp {
+                    break;
+                }
             }
-            counts.levels.push(Level {
+            placed.counts.levels.push(Level {
                 stride,
-                records: needy.len(),
+                records: made,
             });
         }
-        Ok((records, index, counts))
+        Ok((placed.records, placed.index, placed.counts))
+    }
+
+    /// Records at pixels `needy` of the level of `stride` (its number `level`): their E and
+    /// radii, in parallel, then each clamped by its neighbours where asked and indexed, in
+    /// pixel order.
+    fn add(
+        &self,
+        placed: &mut Placed,
+        needy: &[u32],
+        (stride, level): (u32, u32),
+        seconds: &mut CacheSeconds,
+        progress: &dyn Progress,
+    ) -> Result<()> {
+        let e_start = Instant::now();
+        let gathered = self.gather(needy, stride, progress)?;
+        seconds.e += e_start.elapsed().as_secs_f64();
+        let h_start = Instant::now();
+        let spaced = self.radii(needy, &gathered)?;
+        seconds.h += h_start.elapsed().as_secs_f64();
+        for ((&p, gathered), spaced) in needy.iter().zip(&gathered).zip(spaced) {
+            placed.counts.rays_e += gathered.tally.rays;
+            placed.counts.rays_h += spaced.tally.rays;
+            let hit = self.hit(p);
+            let mut unclamped = spaced.radius;
+            if self.params.neighbour_clamp {
+                let clamp = |pixel, r| self.clamped(r, self.hit(pixel));
+                unclamped = placed
+                    .neighbours
+                    .clamp(&mut placed.records, hit.point, unclamped, clamp);
+                placed.neighbours.insert(hit.point, unclamped);
+            }
+            let record = Record {
+                pixel: p,
+                point: hit.point,
+                normal: hit.normal,
+                e: gathered.e,
+                radius: self.clamped(unclamped, hit),
+                level,
+                gradients: gathered.gradients,
+            };
+            placed.index.insert(placed.records.len() as u32, &record);
+            placed.records.push(record);
+        }
+        Ok(())
     }
 
     /// The surface pixels of the grid of `stride` that no record covers, in pixel order.
@@ -562,18 +624,32 @@ impl Placement<'_> {
         let gathered = needy
             .par_iter()
             .map(|&p| {
-                let mut own = OwnRays::new(self.context.clamp);
+                let c = self.context;
+                let key = (c.seed, p as u64);
+                let mut own = OwnRays::new(c.clamp);
+                let params = &self.params.irradiance;
+                let mut cells = self.params.gradients.then(|| GradientRays::new(params, key));
                 let (e, tally) = if crate::interrupt::requested() {
                     (f32::NAN, Tally::default())
                 } else {
-                    let c = self.context;
-                    let key = (c.seed, p as u64);
-                    let observe = |t, w| own.add(t, w);
+                    let observe = |t, w, term| {
+                        own.add(t, w);
+                        if let Some(cells) = &mut cells {
+                            cells.add(t, w, term);
+                        }
+                    };
                     self.irradiance
                         .at(c.accel, &self.light, self.hit(p), key, c.clamp.max, observe)
                 };
                 progress.advance(1);
-                Gathered { e, tally, own }
+                let frame = || GatherStart::at_hit(self.hit(p)).frame;
+                let gradients = cells.map(|cells| cells.gradients(&frame()));
+                Gathered {
+                    e,
+                    tally,
+                    own,
+                    gradients,
+                }
             })
             .collect();
         progress.finish();
@@ -652,7 +728,8 @@ impl Placement<'_> {
                     None => (f32::NAN, f32::NAN),
                     Some(hit) => {
                         index.covering(records, p as u32, hit.point, hit.normal, covering);
-                        (interpolate(records, covering), covering.len() as f32)
+                        let e = interpolate(records, covering, hit.point, hit.normal);
+                        (e, covering.len() as f32)
                     }
                 }
             })

@@ -5,14 +5,19 @@
 //! that cover it: so that an estimator of H is judged by the cache it makes.
 //!
 //! `records.rs` holds the records, Ward's weight and the grids that find them; `spacing.rs`
-//! where a radius comes from; `build.rs` the placement, the interpolation and the report.
+//! where a radius comes from; `gradients.rs` Ward and Heckbert's gradients of a record;
+//! `neighbours.rs` Křivánek's neighbour clamping; `build.rs` the placement, the
+//! interpolation and the report.
 
 mod build;
+mod gradients;
+mod neighbours;
 mod records;
 mod spacing;
 
 pub use build::{
     cache, top_stride, CacheErrors, CacheParams, CacheReport, CacheSeconds, Cached, Level, DEFAULT_ACCURACY,
 };
+pub use gradients::Gradients;
 pub use records::{interpolate, Record};
 pub use spacing::{Range, Spacing};

@@ -5,6 +5,8 @@ use std::collections::HashMap;
 
 use glam::Vec3;
 
+use super::gradients::Gradients;
+
 /// One record: the irradiance at a pixel's surface point and the radius it holds for.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Record {
@@ -20,6 +22,8 @@ pub struct Record {
     pub radius: f32,
     /// The placement level it was made at (0: every pixel; k: every 2^k-th).
     pub level: u32,
+    /// Its gradients, where the cache takes them (`--gradients`).
+    pub gradients: Option<Gradients>,
 }
 
 impl Record {
@@ -36,6 +40,19 @@ impl Record {
             distance / self.radius
         };
         spatial + (1.0 - normal.dot(self.normal)).max(0.0).sqrt()
+    }
+
+    /// Its E carried to `point` with `normal`: E_i, or, with gradients, `E_i + (n_i × n)·∇_r
+    /// + (x − x_i)·∇_t`, at least 0.
+    pub fn e_at(&self, point: Vec3, normal: Vec3) -> f64 {
+        match &self.gradients {
+            None => self.e as f64,
+            Some(g) => {
+                let turn = self.normal.cross(normal).dot(g.rotation) as f64;
+                let shift = (point - self.point).dot(g.translation) as f64;
+                (self.e as f64 + turn + shift).max(0.0)
+            }
+        }
     }
 }
 
@@ -132,17 +149,18 @@ impl RecordIndex {
     }
 }
 
-/// E at a point from the records covering it (`covering`, as [`RecordIndex::covering`] gives
-/// them): the record at the point itself where there is one (ε = 0), else
-/// `Σ w_i E_i / Σ w_i` with `w_i = 1/ε_i`. NaN where none covers it.
-pub fn interpolate(records: &[Record], covering: &[(u32, f32)]) -> f32 {
+/// E at `point` with `normal` from the records covering it (`covering`, as
+/// [`RecordIndex::covering`] gives them): the record at the point itself where there is one
+/// (ε = 0), else `Σ w_i E_i / Σ w_i` with `w_i = 1/ε_i` (each E_i carried to the point by its
+/// gradients where it has them, [`Record::e_at`]). NaN where none covers it.
+pub fn interpolate(records: &[Record], covering: &[(u32, f32)], point: Vec3, normal: Vec3) -> f32 {
     if let Some(&(id, _)) = covering.iter().find(|(_, error)| *error == 0.0) {
         return records[id as usize].e;
     }
     let (mut sum, mut weights) = (0.0f64, 0.0f64);
     for &(id, error) in covering {
         let w = 1.0 / error as f64;
-        sum += w * records[id as usize].e as f64;
+        sum += w * records[id as usize].e_at(point, normal);
         weights += w;
     }
     (sum / weights) as f32
@@ -160,6 +178,7 @@ mod tests {
             e,
             radius,
             level: 0,
+            gradients: None,
         }
     }
 
@@ -214,9 +233,28 @@ mod tests {
     fn interpolation_weights_by_the_inverse_error_and_takes_an_exact_record() {
         let records = [record(0, 0.0, 1.0, 1.0), record(1, 1.0, 4.0, 1.0)];
         // ε 0.25 and 0.75: weights 4 and 4/3.
-        let e = interpolate(&records, &[(0, 0.25), (1, 0.75)]);
+        let at = |covering: &[(u32, f32)]| interpolate(&records, covering, Vec3::X, Vec3::Z);
+        let e = at(&[(0, 0.25), (1, 0.75)]);
         assert!((e - (4.0 * 1.0 + 4.0 / 3.0 * 4.0) / (4.0 + 4.0 / 3.0)).abs() < 1e-6);
-        assert_eq!(interpolate(&records, &[(0, 0.25), (1, 0.0)]), 4.0);
-        assert!(interpolate(&records, &[]).is_nan());
+        assert_eq!(at(&[(0, 0.25), (1, 0.0)]), 4.0);
+        assert!(at(&[]).is_nan());
+    }
+
+    #[test]
+    fn gradients_carry_a_records_e_to_the_point_and_never_below_zero() {
+        let mut r = record(0, 0.0, 1.0, 1.0);
+        r.gradients = Some(Gradients {
+            rotation: Vec3::new(0.0, 2.0, 0.0),
+            translation: Vec3::new(0.5, 0.0, 0.0),
+        });
+        // Moved 0.4 along x: + 0.2. Turned towards x by a small angle: n_i × n = (0, s, 0),
+        // so + 2 s.
+        assert!((r.e_at(Vec3::new(0.4, 0.0, 0.0), Vec3::Z) - 1.2).abs() < 1e-6);
+        let n = Vec3::new(0.1, 0.0, 1.0).normalize();
+        let expected = 1.0 + 2.0 * Vec3::Z.cross(n).y as f64;
+        assert!((r.e_at(Vec3::ZERO, n) - expected).abs() < 1e-6);
+        assert_eq!(r.e_at(Vec3::new(-4.0, 0.0, 0.0), Vec3::Z), 0.0);
+        r.gradients = None;
+        assert_eq!(r.e_at(Vec3::new(0.4, 0.0, 0.0), n), 1.0);
     }
 }

@@ -294,7 +294,7 @@ mod tests {
             normal: Vec3::Z,
         };
         let mut own = OwnRays::new(DistanceClamp::for_diagonal(400.0, None));
-        irradiance.at(&accel, &light.into(), &hit, (1, 7), f32::INFINITY, |t, w| {
+        irradiance.at(&accel, &light.into(), &hit, (1, 7), f32::INFINITY, |t, w, _| {
             own.add(t, w)
         });
         let min = own.radius(&Spacing::Min).unwrap();

@@ -36,6 +36,15 @@ pub struct CacheArgs {
     /// Clamp R to LO..HI times l_diag (Mitsuba: 0.005,0.32).
     #[arg(long, value_name = "LO,HI")]
     clamp_scene: Option<String>,
+    /// Křivánek's neighbour clamping: a radius (before the clamps above) is cut to a nearby
+    /// record's plus the distance between them, and theirs to it plus that distance.
+    #[arg(long)]
+    neighbour_clamp: bool,
+    /// Ward and Heckbert's rotation and translation gradients: each record's E is carried
+    /// to the point before weighting. Needs cosine weighting and a grid of one ray per cell
+    /// (--sampler grid, or sobol with a power of two --rays).
+    #[arg(long)]
+    gradients: bool,
     /// An image of H of the same pixels, read by --spacing oracle.
     #[arg(long, value_name = "H.exr")]
     oracle: Option<PathBuf>,
@@ -166,6 +175,8 @@ impl CacheArgs {
             spacing: Spacing::parse(&self.spacing)?,
             clamp_pixels: range("clamp_pixels", &self.clamp_pixels)?,
             clamp_scene: range("clamp_scene", &self.clamp_scene)?,
+            neighbour_clamp: self.neighbour_clamp,
+            gradients: self.gradients,
         })
     }
 

@@ -112,8 +112,9 @@ impl Irradiance {
 
     /// The indirect irradiance at `hit` (its normal facing the side gathered over) from
     /// `light`, with the random numbers of `key`: E, and the rays cast (gather and shadow).
-    /// `observe` sees each gather ray's hit distance (`+inf` for an escape) and its local
-    /// direction (z along the normal): what an irradiance cache's record spaces itself by.
+    /// `observe` sees each gather ray's hit distance (`+inf` for an escape), its local
+    /// direction (z along the normal) and its term of E (E is their mean): what an irradiance
+    /// cache's record spaces itself by and takes its gradients from.
     pub(crate) fn at<R: RayCaster>(
         &self,
         accel: &R,
@@ -121,7 +122,7 @@ impl Irradiance {
         hit: &Hit,
         (seed, key): (u64, u64),
         t_max: f32,
-        mut observe: impl FnMut(f32, Vec3),
+        mut observe: impl FnMut(f32, Vec3, f32),
     ) -> (f32, Tally) {
         let start = GatherStart::at_hit(hit);
         let mut tally = Tally::default();
@@ -130,9 +131,9 @@ impl Irradiance {
             let direction = start.frame.to_world(w);
             tally.rays += 1;
             let hit = accel.closest_hit(start.origin, direction, t_max, start.leaving);
-            observe(hit.map_or(f32::INFINITY, |y| y.t), w);
             let Some(mut y) = hit else {
                 tally.escaped += 1;
+                observe(f32::INFINITY, w, 0.0);
                 continue;
             };
             if y.normal.dot(direction) > 0.0 {
@@ -145,7 +146,9 @@ impl Irradiance {
                 Weighting::Cosine => 1.0,
                 Weighting::Uniform => 2.0 * w.z as f64,
             };
-            sum += direct as f64 * weight;
+            let term = direct as f64 * weight;
+            observe(y.t, w, (self.reflectance() as f64 * term) as f32);
+            sum += term;
         }
         let e = self.reflectance() as f64 * sum / self.params.rays as f64;
         (e as f32, tally)
@@ -288,7 +291,7 @@ impl PixelWorker for IrradianceWorker<'_> {
         let (e, cast) =
             self.pixels
                 .irradiance
-                .at(c.accel, light, hit, (c.seed, pixel), c.clamp.max, |_, _| {});
+                .at(c.accel, light, hit, (c.seed, pixel), c.clamp.max, |_, _, _| {});
         *tally = *tally + cast;
         if c.aovs.contains(&Aov::EDirect) {
             let (direct, shadow_rays) = direct_irradiance(c.accel, light, hit);
@@ -410,7 +413,7 @@ mod tests {
                         &floor_point(0.0, 0.0),
                         (1, key),
                         f32::INFINITY,
-                        |_, _| {},
+                        |_, _, _| {},
                     );
                     assert!(tally.rays >= rays as u64 && tally.rays <= 2 * rays as u64);
                     e as f64
@@ -436,7 +439,7 @@ mod tests {
             &floor_point(0.0, 0.0),
             (1, 0),
             f32::INFINITY,
-            |_, _| {},
+            |_, _, _| {},
         );
         assert_eq!(e, 0.0);
         // Between the planes, but its cone turned away from the ceiling (a hard edge at 80°
@@ -452,7 +455,7 @@ mod tests {
             &floor_point(0.0, 0.0),
             (1, 0),
             f32::INFINITY,
-            |_, _| {},
+            |_, _, _| {},
         );
         assert_eq!(e, 0.0);
         // Gathered only within a max distance shorter than the ceiling's: nothing is met.
@@ -462,7 +465,7 @@ mod tests {
             &floor_point(0.0, 0.0),
             (1, 0),
             0.9,
-            |_, _| {},
+            |_, _, _| {},
         );
         assert_eq!((e, tally.escaped), (0.0, 1_024));
     }
