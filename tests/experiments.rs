@@ -744,3 +744,70 @@ fn the_cost_plot_has_every_image_of_tables_1_to_3_and_its_front_is_the_undominat
         "{html}"
     );
 }
+
+#[test]
+fn the_cache_study_measures_every_source_at_every_accuracy_and_a_rerun_reuses_the_caches() {
+    let dir = Scratch::new("experiments-caches");
+    let out = dir.join("out");
+    let study = |out: &Path| {
+        let mut runner = Runner::new("cube", Preset::Quick, out, &Silent)
+            .unwrap()
+            .with_size(Some(24))
+            .unwrap();
+        runner.run("cache").unwrap();
+    };
+    study(&out);
+    let csv = std::fs::read_to_string(out.join("cache.csv")).unwrap();
+    assert_eq!(
+        csv.lines().count(),
+        1 + 13 * 6,
+        "one row per source and accuracy:\n{csv}"
+    );
+    // Every cache errs, by less with a finer accuracy for the records' own H (its rows come
+    // first, coarsest a first), and costs more.
+    let hmd: Vec<&str> = csv.lines().skip(1).take(6).collect();
+    let hmd = format!("header\n{}", hmd.join("\n"));
+    let (mean, rays) = (column(&hmd, 5), column(&hmd, 3));
+    println!("{csv}");
+    assert!(
+        mean.iter().all(|&e| e > 0.0) && mean.first() > mean.last(),
+        "{mean:?}"
+    );
+    assert!(rays.windows(2).all(|w| w[0] <= w[1]), "{rays:?}");
+    for file in [
+        "cache.svg",
+        "cache_p95.svg",
+        "cache_records.png",
+        "cache_equal_error.md",
+    ] {
+        assert!(out.join(file).exists(), "{file}");
+    }
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(
+        html.contains("Does a more accurate H make a better cache"),
+        "the findings"
+    );
+    // A rerun reads every cache back: none is written again.
+    let kept = |out: &Path| -> BTreeMap<String, SystemTime> {
+        std::fs::read_dir(out.join("cache-irradiance"))
+            .unwrap()
+            .map(|e| {
+                let e = e.unwrap();
+                (
+                    e.file_name().to_string_lossy().into_owned(),
+                    e.metadata().unwrap().modified().unwrap(),
+                )
+            })
+            .collect()
+    };
+    let before = kept(&out);
+    assert_eq!(before.keys().filter(|k| k.ends_with(".json")).count(), 13 * 6);
+    study(&out);
+    assert_eq!(kept(&out), before);
+    assert_eq!(std::fs::read_to_string(out.join("cache.csv")).unwrap(), csv);
+    // A scene without a spot light has nothing to cache: a note, and no images.
+    let slab = dir.join("slab");
+    let mut runner = Runner::new("slab", Preset::Quick, &slab, &Silent).unwrap();
+    runner.run("cache").unwrap();
+    assert!(runner.sections[0].notes[0].contains("has no spot light"));
+}

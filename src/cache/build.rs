@@ -174,7 +174,7 @@ impl CacheReport {
 }
 
 /// A cache's error against a brute-force image of E (`render --method irradiance`).
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct CacheErrors {
     /// The reference's file, as given.
     pub path: String,
@@ -199,54 +199,65 @@ pub struct Cached {
 }
 
 impl Cached {
-    /// Each pixel's relative error against `reference` (the same size): `|E − E_ref| /
-    /// max(E_ref, 0.01 · mean E_ref)`, NaN where either is not finite; and its mean and p95
-    /// (into the report, under `path`).
+    /// Each pixel's relative error against `reference` ([`relative_errors`]), its mean and
+    /// p95 put into the report under `path`.
     pub fn compare(&mut self, reference: &HmdImage, path: &str) -> Result<Vec<f32>> {
-        let (w, h) = (self.image.width, self.image.height);
-        if (reference.width, reference.height) != (w, h) {
-            let message = format!(
-                "is {}x{}, the cache {w}x{h}: it must be an image of the same pixels",
-                reference.width, reference.height
-            );
-            return Err(Error::invalid("reference", message));
-        }
-        let finite: Vec<f64> = reference
-            .data
-            .iter()
-            .filter(|v| v.is_finite())
-            .map(|&v| v as f64)
-            .collect();
-        let floor = 0.01 * finite.iter().sum::<f64>() / finite.len().max(1) as f64;
-        let errors: Vec<f32> = self
-            .image
-            .data
-            .iter()
-            .zip(&reference.data)
-            .map(|(&e, &r)| {
-                if e.is_finite() && r.is_finite() {
-                    ((e as f64 - r as f64).abs() / (r as f64).max(floor)) as f32
-                } else {
-                    f32::NAN
-                }
-            })
-            .collect();
-        let mut sorted: Vec<f32> = errors.iter().copied().filter(|e| e.is_finite()).collect();
-        if sorted.is_empty() {
-            let message = "shares no pixel with a finite value with the cache: is it an image of this scene?";
-            return Err(Error::invalid("reference", message));
-        }
-        sorted.sort_unstable_by(f32::total_cmp);
-        let n = sorted.len();
-        let p95 = sorted[((0.95 * n as f64).ceil() as usize).clamp(1, n) - 1];
-        self.report.reference = Some(CacheErrors {
-            path: path.into(),
-            mean_relative_error: sorted.iter().map(|&e| e as f64).sum::<f64>() / n as f64,
-            p95_relative_error: p95 as f64,
-            pixels: n as u64,
-        });
+        let (errors, summary) = relative_errors(&self.image, reference, path)?;
+        self.report.reference = Some(summary);
         Ok(errors)
     }
+}
+
+/// Each pixel's relative error of `image` against `reference` (the same size): `|E − E_ref|
+/// / max(E_ref, 0.01 · mean E_ref)`, NaN where either is not finite; and its mean and p95,
+/// the reference named `path`.
+pub fn relative_errors(
+    image: &HmdImage,
+    reference: &HmdImage,
+    path: &str,
+) -> Result<(Vec<f32>, CacheErrors)> {
+    let (w, h) = (image.width, image.height);
+    if (reference.width, reference.height) != (w, h) {
+        let message = format!(
+            "is {}x{}, the cache {w}x{h}: it must be an image of the same pixels",
+            reference.width, reference.height
+        );
+        return Err(Error::invalid("reference", message));
+    }
+    let finite: Vec<f64> = reference
+        .data
+        .iter()
+        .filter(|v| v.is_finite())
+        .map(|&v| v as f64)
+        .collect();
+    let floor = 0.01 * finite.iter().sum::<f64>() / finite.len().max(1) as f64;
+    let errors: Vec<f32> = image
+        .data
+        .iter()
+        .zip(&reference.data)
+        .map(|(&e, &r)| {
+            if e.is_finite() && r.is_finite() {
+                ((e as f64 - r as f64).abs() / (r as f64).max(floor)) as f32
+            } else {
+                f32::NAN
+            }
+        })
+        .collect();
+    let mut sorted: Vec<f32> = errors.iter().copied().filter(|e| e.is_finite()).collect();
+    if sorted.is_empty() {
+        let message = "shares no pixel with a finite value with the cache: is it an image of this scene?";
+        return Err(Error::invalid("reference", message));
+    }
+    sorted.sort_unstable_by(f32::total_cmp);
+    let n = sorted.len();
+    let p95 = sorted[((0.95 * n as f64).ceil() as usize).clamp(1, n) - 1];
+    let summary = CacheErrors {
+        path: path.into(),
+        mean_relative_error: sorted.iter().map(|&e| e as f64).sum::<f64>() / n as f64,
+        p95_relative_error: p95 as f64,
+        pixels: n as u64,
+    };
+    Ok((errors, summary))
 }
 
 /// The coarsest level's stride: the largest power of two at most an eighth of the image's

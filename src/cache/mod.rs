@@ -16,7 +16,8 @@ mod records;
 mod spacing;
 
 pub use build::{
-    cache, top_stride, CacheErrors, CacheParams, CacheReport, CacheSeconds, Cached, Level, DEFAULT_ACCURACY,
+    cache, relative_errors, top_stride, CacheErrors, CacheParams, CacheReport, CacheSeconds, Cached, Level,
+    DEFAULT_ACCURACY,
 };
 pub use gradients::Gradients;
 pub use records::{interpolate, Record};

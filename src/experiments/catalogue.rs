@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use super::presets::PresetParams;
 use super::runner::Runner;
 use super::section::Section;
-use super::{adaptive, cost, photons, rays, report};
+use super::{adaptive, caches, cost, photons, rays, report};
 
 /// One experiment: its name, what it shows, how many images it may render, and the code.
 pub struct Experiment {
@@ -77,6 +77,12 @@ pub const EXPERIMENTS: &[Experiment] = &[
         summary: "f_diff against rays cast, fixed N against adaptive gathering (the rays saved)",
         images: |p| 1 + p.rays.len() as u64 + adaptive::TOLERANCES.len() as u64,
         run: adaptive::adaptive,
+    },
+    Experiment {
+        name: "cache",
+        summary: "irradiance caches spaced by each estimator of H, an oracle and the renderers' rules: error against rays",
+        images: |_| 3 + caches::CACHES as u64,
+        run: caches::caches,
     },
     Experiment {
         name: "memory",

@@ -10,18 +10,20 @@
 //!
 //! The experiments are listed once, in [`EXPERIMENTS`]: the ray studies (`rays.rs`: Tables
 //! 1–2, Fig. 9), the photon studies (`photons.rs`: Tables 3–4, Fig. 10, 16/17, memory) and
-//! the adaptive study (`adaptive.rs`: rays saved at equal f_diff), and accuracy against cost
-//! over them all (`cost.rs`).
+//! the adaptive study (`adaptive.rs`: rays saved at equal f_diff), the irradiance-cache study
+//! (`caches.rs`: what each source of H makes of the cache it spaces), and accuracy against
+//! cost over them all (`cost.rs`).
 //! The paper's published numbers are in [`paper`].
 //!
 //! The module is an index; its files point down: [`catalogue`] (the list, running it) above
-//! the studies (`rays`, `photons`, `adaptive`, `cost`) and the HTML report, above the
+//! the studies (`rays`, `photons`, `adaptive`, `caches`, `cost`) and the HTML report, above the
 //! [`Runner`] (`runner.rs`, with `cache.rs`, `legacy.rs` (earlier versions' cache keys) and
 //! `planning.rs`), above the vocabulary
 //! ([`presets`], [`Section`], [`Table`], [`plan`], `plot`, `grid`, [`paper`]).
 
 mod adaptive;
 mod cache;
+mod caches;
 pub mod catalogue;
 mod cost;
 mod grid;

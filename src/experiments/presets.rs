@@ -43,6 +43,10 @@ pub struct PresetParams {
     pub fig10_nearest: usize,
     /// Per-quadrant hemicube resolution R of Tables 1 and 2.
     pub cube_res: u32,
+    /// Gather rays M of each irradiance-cache record (the cache study).
+    pub cache_rays: u32,
+    /// Rays of the cache study's brute-force images of E.
+    pub cache_reference_rays: u32,
 }
 
 impl Preset {
@@ -68,6 +72,8 @@ impl Preset {
                 fig10_photons: 1_060_000,
                 fig10_nearest: 4096,
                 cube_res: 64,
+                cache_rays: 512,
+                cache_reference_rays: 4096,
             },
             Preset::Paper => PresetParams {
                 size: 1024,
@@ -81,6 +87,8 @@ impl Preset {
                 fig10_photons: 8_530_000,
                 fig10_nearest: 65_536,
                 cube_res: 64,
+                cache_rays: 512,
+                cache_reference_rays: 16_384,
             },
         }
     }
