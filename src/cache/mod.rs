@@ -6,19 +6,20 @@
 //!
 //! `records.rs` holds the records, Ward's weight and the grids that find them; `spacing.rs`
 //! where a radius comes from; `gradients.rs` Ward and Heckbert's gradients of a record;
-//! `neighbours.rs` Křivánek's neighbour clamping; `build.rs` the placement, the
-//! interpolation and the report.
+//! `neighbours.rs` Křivánek's neighbour clamping; `params.rs` what a cache is built
+//! with; `build.rs` the placement and the interpolation; `report.rs` the report and the error against a reference.
 
 mod build;
 mod gradients;
 mod neighbours;
+mod params;
 mod records;
+mod report;
 mod spacing;
 
-pub use build::{
-    cache, relative_errors, top_stride, CacheErrors, CacheParams, CacheReport, CacheSeconds, Cached, Level,
-    DEFAULT_ACCURACY,
-};
+pub use build::{cache, top_stride, Cached};
 pub use gradients::Gradients;
+pub use params::{CacheParams, DEFAULT_ACCURACY};
 pub use records::{interpolate, Record};
+pub use report::{relative_errors, CacheErrors, CacheReport, CacheSeconds, Level};
 pub use spacing::{Range, Spacing};
