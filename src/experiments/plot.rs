@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use plotters::coord::combinators::WithKeyPoints;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
@@ -17,13 +18,19 @@ pub struct Series {
     pub points: Vec<(f64, f64)>,
 }
 
-const COLOURS: [RGBColor; 6] = [
+/// The palette, in order (its first six as before; then pink, grey, olive, cyan, as
+/// matplotlib's tab10).
+const COLOURS: [RGBColor; 10] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
     RGBColor(148, 103, 189),
     RGBColor(255, 127, 14),
     RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
 ];
 
 /// How a series is drawn: points joined by a line or not, markers filled or hollow (a
@@ -130,6 +137,7 @@ pub fn log_log_with(
     let (x_range, y_range) = (range(|p| p.0, left_room), range(|p| p.1, 1.5));
     let legend = emptiest_corner(&all, (x_range.start, x_range.end), (y_range.start, y_range.end));
     let size = if front.is_empty() { (720, 480) } else { (900, 600) };
+    let y_ticks = log_ticks(y_range.start, y_range.end);
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
@@ -139,7 +147,10 @@ pub fn log_log_with(
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(60)
-            .build_cartesian_2d(x_range.log_scale(), y_range.log_scale())
+            .build_cartesian_2d(
+                x_range.log_scale(),
+                y_range.clone().log_scale().with_key_points(y_ticks),
+            )
             .map_err(|e| fail(&e))?;
         chart
             .configure_mesh()
@@ -167,7 +178,28 @@ pub fn log_log_with(
 }
 
 /// The chart [`log_log_with`] draws on.
-type LogLogChart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>;
+type LogLogChart<'a, 'b> =
+    ChartContext<'a, SVGBackend<'b>, Cartesian2d<LogCoord<f64>, WithKeyPoints<LogCoord<f64>>>>;
+
+/// Ticks of a log axis from `lo` to `hi`: 1, 2 and 5 times the powers of ten between them,
+/// or every digit where those are fewer than three (an axis under a decade otherwise shows
+/// one label or none).
+fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let decades = lo.log10().floor() as i32..=hi.log10().ceil() as i32;
+    let ticks = |mantissas: &[f64]| -> Vec<f64> {
+        decades
+            .clone()
+            .flat_map(|k| mantissas.iter().map(move |m| m * 10f64.powi(k)))
+            .filter(|v| (lo..=hi).contains(v))
+            .collect()
+    };
+    let coarse = ticks(&[1.0, 2.0, 5.0]);
+    if coarse.len() >= 3 {
+        coarse
+    } else {
+        ticks(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0])
+    }
+}
 
 /// Whether a point can be drawn on log axes.
 fn usable(&(x, y): &(f64, f64)) -> bool {
@@ -281,4 +313,23 @@ fn emptiest_corner(points: &[(f64, f64)], x: (f64, f64), y: (f64, f64)) -> Serie
 fn short(v: f64) -> String {
     let digits = (2 - v.abs().log10().floor() as i32).max(0) as usize;
     format!("{v:.digits$}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::log_ticks;
+
+    #[test]
+    fn log_ticks_are_one_two_five_or_every_digit_under_a_decade() {
+        let close = |a: &[f64], b: &[f64]| {
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x / y - 1.0).abs() < 1e-12)
+        };
+        let t = log_ticks(1.5, 15.0);
+        assert!(close(&t, &[2.0, 5.0, 10.0]), "{t:?}");
+        let t = log_ticks(0.009, 0.3);
+        assert!(close(&t, &[0.01, 0.02, 0.05, 0.1, 0.2]), "{t:?}");
+        // Under a decade with fewer than three of 1, 2, 5: every digit.
+        let t = log_ticks(1.2, 4.5);
+        assert!(close(&t, &[2.0, 3.0, 4.0]), "{t:?}");
+    }
 }

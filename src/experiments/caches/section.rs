@@ -194,16 +194,7 @@ fn plots(
                 points: mine.iter().map(|r| (r.rays(), 100.0 * error(r))).collect(),
             })
             .collect();
-        let marks: Vec<(&Series, Marks)> = series
-            .iter()
-            .enumerate()
-            .map(|(i, s)| {
-                (
-                    s,
-                    if i < 10 { Marks::LINE } else { Marks::HOLLOW }.coloured(i % 10),
-                )
-            })
-            .collect();
+        let marks: Vec<(&Series, Marks)> = series.iter().zip(source_marks()).collect();
         // The front of mean error, labelled where it passes to another source.
         let labelled: Vec<(f64, f64, String)> = front
             .iter()
@@ -237,6 +228,32 @@ fn plots(
         files.push(path);
     }
     Ok(files)
+}
+
+/// How each source is drawn: those with neighbour clamping hollow and dashed, in the colour
+/// of the same spacing and clamps without it; the others solid, each its own colour.
+fn source_marks() -> Vec<Marks> {
+    let solid: Vec<&str> = SOURCES
+        .iter()
+        .filter(|s| !s.neighbour_clamp)
+        .map(|s| s.name)
+        .collect();
+    let place = |name: &str| solid.iter().position(|&n| n == name).expect("a solid source");
+    SOURCES
+        .iter()
+        .map(|s| match s.neighbour_clamp {
+            false => Marks::LINE.coloured(place(s.name)),
+            true => {
+                let plain = SOURCES.iter().find(|t| {
+                    !t.neighbour_clamp
+                        && !t.gradients
+                        && (t.spacing, t.clamp_pixels, t.clamp_scene)
+                            == (s.spacing, s.clamp_pixels, s.clamp_scene)
+                });
+                Marks::HOLLOW.coloured(place(plain.map_or(SOURCES[0].name, |t| t.name)))
+            }
+        })
+        .collect()
 }
 
 /// `cache_records.png`: the pictured sources' records at [`PICTURED_ACCURACY`], side by side,
