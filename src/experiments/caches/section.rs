@@ -348,12 +348,12 @@ impl Reading<'_> {
             return "—".into();
         };
         let against = match rays_to_reach(&self.runs[0], cheapest.mean()) {
-            Reach::At(r) => format!("×{:.2}", cheapest.rays() / r),
-            Reach::AtMost(r) => format!("×≥ {:.2}", cheapest.rays() / r),
-            Reach::Never => "H never reaches its error".into(),
+            Reach::At(r) => format!("×{:.2} of H's", cheapest.rays() / r),
+            Reach::AtMost(r) => format!("≥ ×{:.2} of H's", cheapest.rays() / r),
+            Reach::Never => "no cache of H is as good".into(),
         };
         format!(
-            "{:.2e} rays for {:.2} % ({against} of H's)",
+            "{:.2e} rays for {:.2} % ({against})",
             cheapest.rays(),
             100.0 * cheapest.mean()
         )
@@ -431,7 +431,7 @@ fn findings(
             reading.cheapest("hmd-mitsuba")
         ),
         format!(
-            "What the production options buy H: at a = {PICTURED_ACCURACY} Ward and Heckbert's gradients take the mean error from {:.2} % to {:.2} % with the same records (H's rays to every error: {}); neighbour clamping to {:.2} % with {} records against {}.",
+            "What the production options buy H: at a = {PICTURED_ACCURACY} Ward and Heckbert's gradients take the mean error from {:.2} % to {:.2} % with the same records (the rays for each of H's errors: {} of H's); neighbour clamping to {:.2} % with {} records against {}.",
             100.0 * at("hmd").mean(),
             100.0 * at("hmd-gradients").mean(),
             reading.span("hmd-gradients"),
