@@ -49,6 +49,21 @@ pub struct Cached {
 }
 
 impl Cached {
+    /// E in grey at exposure `scale` (`clamp(scale · E)`), each record's pixel red.
+    pub fn picture(&self, scale: f32) -> image::RgbImage {
+        let grey = crate::image::picture::grey(&self.image, scale);
+        let mut picture = image::DynamicImage::ImageLuma8(grey).to_rgb8();
+        let width = self.image.width;
+        for record in &self.records {
+            picture.put_pixel(
+                record.pixel % width,
+                record.pixel / width,
+                image::Rgb([230, 30, 30]),
+            );
+        }
+        picture
+    }
+
     /// Each pixel's relative error against `reference` ([`relative_errors`]), its mean and
     /// p95 put into the report under `path`.
     pub fn compare(&mut self, reference: &HmdImage, path: &str) -> Result<Vec<f32>> {

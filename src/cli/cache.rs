@@ -5,7 +5,6 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use clap::Args;
-use image::{Rgb, RgbImage};
 
 use hmdist::cache::{cache, CacheParams, Range, Spacing, DEFAULT_ACCURACY};
 use hmdist::error::{Error, Result};
@@ -137,7 +136,7 @@ pub fn run(args: CacheArgs) -> Result<()> {
             size,
             &args.out,
         )?,
-        picture::encode_png(&args.picture(&cached), &png)?,
+        picture::encode_png(&cached.picture(args.scale(&cached)), &png)?,
         cached.report.to_json().into_bytes(),
     ];
     if let (Some(path), Some(errors)) = (&args.diff_png, &errors) {
@@ -180,18 +179,10 @@ impl CacheArgs {
         })
     }
 
-    /// The PNG: E in grey at `--scale` (by default irradiance's), each record's pixel red.
-    fn picture(&self, cached: &hmdist::cache::Cached) -> RgbImage {
-        let scale = self
-            .scale
-            .unwrap_or_else(|| irradiance::display_scale(cached.report.l_diag));
-        let grey = picture::grey(&cached.image, scale);
-        let mut picture = image::DynamicImage::ImageLuma8(grey).to_rgb8();
-        let width = cached.image.width;
-        for record in &cached.records {
-            picture.put_pixel(record.pixel % width, record.pixel / width, Rgb([230, 30, 30]));
-        }
-        picture
+    /// The PNG's exposure: `--scale`, by default irradiance's.
+    fn scale(&self, cached: &hmdist::cache::Cached) -> f32 {
+        self.scale
+            .unwrap_or_else(|| irradiance::display_scale(cached.report.l_diag))
     }
 }
 

@@ -16,8 +16,6 @@
 mod section;
 mod sources;
 
-use image::{Rgb, RgbImage};
-
 use self::section::write_section;
 use self::sources::{References, Run, Source, ACCURACIES, PICTURED_ACCURACY, SEED, SOURCES};
 use super::presets::REFERENCE_SEED;
@@ -105,9 +103,8 @@ impl Runner<'_> {
             return Ok(run);
         }
         let oracle = (params.spacing == Spacing::Oracle).then_some(&references.h);
-        let mut cached = cache(&self.scene, &params, &options, oracle, &Silent)?;
+        let cached = cache(&self.scene, &params, &options, oracle, &Silent)?;
         let (_, errors) = relative_errors(&cached.image, &references.e, "the first reference")?;
-        cached.report.reference = Some(errors.clone());
         let run = Run {
             records: cached.records.len(),
             rays_e: cached.report.rays_e,
@@ -117,7 +114,7 @@ impl Runner<'_> {
         };
         std::fs::create_dir_all(&folder).map_err(|e| Error::io(&folder, "create the folder", e))?;
         if source.pictured && a == PICTURED_ACCURACY {
-            let picture = records_picture(&cached, self.scene.diagonal());
+            let picture = cached.picture(display_scale(self.scene.diagonal()));
             let path = folder.join(format!("{}.png", source.name));
             write_atomically(&path, &encode_png(&picture, &path)?)?;
         }
@@ -125,15 +122,4 @@ impl Runner<'_> {
         write_atomically(&json, text.as_bytes())?;
         Ok(run)
     }
-}
-
-/// E in grey at the irradiance's display scale, each record's pixel red.
-fn records_picture(cached: &crate::cache::Cached, l_diag: f32) -> RgbImage {
-    let grey = crate::image::picture::grey(&cached.image, display_scale(l_diag));
-    let mut picture = image::DynamicImage::ImageLuma8(grey).to_rgb8();
-    for record in &cached.records {
-        let w = cached.image.width;
-        picture.put_pixel(record.pixel % w, record.pixel / w, Rgb([230, 30, 30]));
-    }
-    picture
 }
