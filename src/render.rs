@@ -35,6 +35,19 @@ pub struct Rendered {
     pub report: RenderReport,
 }
 
+impl Rendered {
+    /// The EXR of the image and its AOVs, the image's channel named as the report names it
+    /// (`Y` for H, `E` for irradiance); `path` names the file in errors.
+    pub fn exr(&self, path: &std::path::Path) -> Result<Vec<u8>> {
+        let channel = self
+            .report
+            .channels
+            .first()
+            .map_or(crate::image::exr::CHANNEL, String::as_str);
+        crate::image::exr::encode_as(channel, &self.image, &self.aovs, path)
+    }
+}
+
 /// Memory a render of `pixels` pixels with `aovs` AOV channels holds at its peak: the
 /// G-buffer, H, the AOV samples and the encoded EXR's channels.
 pub fn image_bytes(pixels: u64, aovs: usize) -> u128 {

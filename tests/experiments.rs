@@ -787,6 +787,23 @@ fn the_cache_study_measures_every_source_at_every_accuracy_and_a_rerun_reuses_th
         html.contains("Does a more accurate H make a better cache"),
         "the findings"
     );
+    // The cached images of E name their channel E, as `render --method irradiance` does, so
+    // that `hmdist cache --reference` takes them.
+    let cached_e: Vec<_> = std::fs::read_dir(out.join("cache"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "exr"))
+        .filter(|p| {
+            p.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("irradiance-")
+        })
+        .collect();
+    assert_eq!(cached_e.len(), 2, "{cached_e:?}");
+    for path in &cached_e {
+        hmdist::image::exr::read_channel(path, "E").unwrap();
+    }
     // A rerun reads every cache back: none is written again.
     let kept = |out: &Path| -> BTreeMap<String, SystemTime> {
         std::fs::read_dir(out.join("cache-irradiance"))

@@ -11,7 +11,7 @@ use clap::Args;
 use hmdist::error::{Error, Result};
 use hmdist::estimators::registry::{self, METHODS};
 use hmdist::estimators::Aov;
-use hmdist::image::{exr, picture, OutputSet};
+use hmdist::image::{picture, OutputSet};
 use hmdist::render::{render, RenderOptions};
 use hmdist::scene::Scene;
 use hmdist::shard::Shard;
@@ -176,7 +176,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     // The JSON records the PNG's scale, so that `merge` draws the merged PNG the same way.
     let scale = args.scale.unwrap_or_else(|| estimator.display_scale(&scene));
     rendered.report.display_scale = scale;
-    let exr_bytes = exr::encode_as(estimator.channel(), &rendered.image, &rendered.aovs, &args.out)?;
+    let exr_bytes = rendered.exr(&args.out)?;
     let png_bytes = picture::encode_png(&picture::grey(&rendered.image, scale), &png)?;
     let mut contents = vec![exr_bytes, png_bytes, rendered.report.to_json().into_bytes()];
     for (aov, path) in &pictures {

@@ -164,7 +164,7 @@ impl Runner<'_> {
                     };
                     let mut outputs = vec![];
                     for (rendered, (exr_path, json_path)) in pass(&options)?.into_iter().zip(&paths) {
-                        let bytes = exr::encode(&rendered.image, &rendered.aovs, exr_path)?;
+                        let bytes = rendered.exr(exr_path)?;
                         write_atomically(exr_path, &bytes)?;
                         write_atomically(json_path, rendered.report.to_json().as_bytes())?;
                         let (width, height) = (options.width, options.height);
@@ -272,10 +272,7 @@ impl Runner<'_> {
     pub(super) fn cache_image(&self, stem: &str, rendered: &crate::render::Rendered) -> Result<()> {
         self.make_cache()?;
         let (exr_path, json_path) = self.cache_paths(stem);
-        write_atomically(
-            &exr_path,
-            &exr::encode(&rendered.image, &rendered.aovs, &exr_path)?,
-        )?;
+        write_atomically(&exr_path, &rendered.exr(&exr_path)?)?;
         write_atomically(&json_path, rendered.report.to_json().as_bytes())
     }
 }
