@@ -135,8 +135,9 @@ impl GradientRays {
         let phi_step = std::f64::consts::TAU / n as f64;
         let (mut x, mut y) = (0.0f64, 0.0f64);
         for k in 0..n {
-            let centre = (k as f64 + 0.5) * phi_step;
-            let wall = k as f64 * phi_step;
+            // u_k (the cell's centre direction) and v_k− (a quarter turn on from its lower wall).
+            let (centre_sin, centre_cos) = ((k as f64 + 0.5) * phi_step).sin_cos();
+            let (wall_sin, wall_cos) = (k as f64 * phi_step).sin_cos();
             let previous = (k + n - 1) % n;
             for j in 0..m {
                 if j >= 1 {
@@ -144,7 +145,7 @@ impl GradientRays {
                     let s = sin_theta(j);
                     let along = phi_step * s * (1.0 - s * s) * (radiance(j, k) - radiance(j - 1, k)) / r;
                     if along.is_finite() {
-                        (x, y) = (x + along * centre.cos(), y + along * centre.sin());
+                        (x, y) = (x + along * centre_cos, y + along * centre_sin);
                     }
                 }
                 if n > 1 {
@@ -152,7 +153,7 @@ impl GradientRays {
                     let across =
                         (sin_theta(j + 1) - sin_theta(j)) * (radiance(j, k) - radiance(j, previous)) / r;
                     if across.is_finite() {
-                        (x, y) = (x - across * wall.sin(), y + across * wall.cos());
+                        (x, y) = (x - across * wall_sin, y + across * wall_cos);
                     }
                 }
             }

@@ -125,6 +125,7 @@ impl Irradiance {
         mut observe: impl FnMut(f32, Vec3, f32),
     ) -> (f32, Tally) {
         let start = GatherStart::at_hit(hit);
+        let rho = self.reflectance() as f64;
         let mut tally = Tally::default();
         let mut sum = 0.0f64;
         for w in self.gather.directions(seed, key) {
@@ -147,10 +148,10 @@ impl Irradiance {
                 Weighting::Uniform => 2.0 * w.z as f64,
             };
             let term = direct as f64 * weight;
-            observe(y.t, w, (self.reflectance() as f64 * term) as f32);
+            observe(y.t, w, (rho * term) as f32);
             sum += term;
         }
-        let e = self.reflectance() as f64 * sum / self.params.rays as f64;
+        let e = rho * sum / self.params.rays as f64;
         (e as f32, tally)
     }
 }

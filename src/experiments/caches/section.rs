@@ -341,10 +341,22 @@ impl Reading<'_> {
         )
     }
 
-    /// `name`'s cheapest cache: its rays, and their multiple of the rays the records' own H
-    /// needs for its error (`≥` where H's cheapest is better already).
+    /// `name`'s cheapest cache: its rays and mean error.
+    fn cheapest_run(&self, name: &str) -> Option<&Run> {
+        self.of(name).iter().min_by(|a, b| a.rays().total_cmp(&b.rays()))
+    }
+
+    /// `name`'s cheapest cache as `rays for error`.
+    fn cheapest_cost(&self, name: &str) -> String {
+        self.cheapest_run(name).map_or("—".into(), |c| {
+            format!("{:.2e} rays for {:.2} %", c.rays(), 100.0 * c.mean())
+        })
+    }
+
+    /// [`Reading::cheapest_cost`] and its multiple of the rays the records' own H needs for
+    /// its error (`≥` where H's cheapest is better already).
     fn cheapest(&self, name: &str) -> String {
-        let Some(cheapest) = self.of(name).iter().min_by(|a, b| a.rays().total_cmp(&b.rays())) else {
+        let Some(cheapest) = self.cheapest_run(name) else {
             return "—".into();
         };
         let against = match rays_to_reach(&self.runs[0], cheapest.mean()) {
@@ -352,11 +364,7 @@ impl Reading<'_> {
             Reach::AtMost(r) => format!("≥ ×{:.2} of H's", cheapest.rays() / r),
             Reach::Never => "no cache of H is as good".into(),
         };
-        format!(
-            "{:.2e} rays for {:.2} % ({against})",
-            cheapest.rays(),
-            100.0 * cheapest.mean()
-        )
+        format!("{} ({against})", self.cheapest_cost(name))
     }
 
     /// The Pareto front (`front`, indices into `all`) in words: each source on it (in the
@@ -424,7 +432,7 @@ fn findings(
             reading.records("pbrt-v2"),
             reading.records("min10-clamped"),
             reading.records("hmd"),
-            reading.cheapest("hmd").split(" (").next().unwrap_or_default(),
+            reading.cheapest_cost("hmd"),
             reading.cheapest("pbrt-v2"),
             reading.cheapest("min10-clamped"),
             reading.cheapest("mitsuba"),
