@@ -63,6 +63,7 @@
 pub mod accel;
 pub mod backend;
 pub mod cache;
+pub mod denoise;
 pub mod error;
 pub mod estimators;
 #[cfg(feature = "experiments")]

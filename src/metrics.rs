@@ -65,7 +65,20 @@ pub struct Comparison {
     /// included): 0 when the two images are the same bit for bit, what this project's
     /// determinism promises (threads, kernels, BVH presets, shards).
     pub differing: usize,
+    /// Signed error, `mean(H − H_ref) · 100 / l_diag`: f_diff's measure with the sign kept, so
+    /// a bias shows (a filter's, a ray offset's) where noise averages out.
+    pub bias: f64,
+    /// f_diff over the creases: the tenth of the compared pixels with the smallest `H_ref`
+    /// (corners, contact), where a filter is most biased; and over the other nine tenths.
+    pub f_diff_creases: f64,
+    /// f_diff over the pixels that are not creases.
+    pub f_diff_rest: f64,
+    /// The 95th percentile of `|H − H_ref| / H_ref` (pixels with `H_ref = 0` left out).
+    pub p95_relative_error: f64,
 }
+
+/// The fraction of the compared pixels (by smallest `H_ref`) that [`Comparison`] calls creases.
+pub const CREASE_FRACTION: f64 = 0.1;
 
 /// `f_diff` (SPEC §4) and the other figures of [`Comparison`].
 pub fn compare(reference: &HmdImage, test: &HmdImage, l_diag: f32) -> Result<Comparison> {
@@ -82,10 +95,31 @@ pub fn compare(reference: &HmdImage, test: &HmdImage, l_diag: f32) -> Result<Com
         }
     }
     let mean = |sum: f64, n: usize| if n == 0 { f64::NAN } else { sum / n as f64 };
+    let pairs: Vec<(f32, f32)> = reference
+        .data
+        .iter()
+        .zip(&test.data)
+        .filter(|(r, t)| r.is_finite() && t.is_finite())
+        .map(|(&r, &t)| (r, t))
+        .collect();
+    let percent = 100.0 / l_diag as f64;
+    let signed: f64 = pairs.iter().map(|&(r, t)| t as f64 - r as f64).sum();
+    let (creases, rest) = split_creases(pairs.clone());
+    let absolute = |p: &[(f32, f32)]| mean(p.iter().map(|&(r, t)| (t as f64 - r as f64).abs()).sum(), p.len()) * percent;
+    let mut relatives: Vec<f64> = pairs
+        .iter()
+        .filter(|(r, _)| *r != 0.0)
+        .map(|&(r, t)| ((t as f64 - r as f64) / r as f64).abs())
+        .collect();
+    relatives.sort_by(f64::total_cmp);
     Ok(Comparison {
         f_diff,
         rmse: mean(squares, f_diff.compared).sqrt(),
         mean_relative_error: mean(relative, relative_count),
+        bias: mean(signed, pairs.len()) * percent,
+        f_diff_creases: absolute(&creases),
+        f_diff_rest: absolute(&rest),
+        p95_relative_error: percentile(&relatives, 0.95),
         differing: reference
             .data
             .iter()
@@ -93,6 +127,24 @@ pub fn compare(reference: &HmdImage, test: &HmdImage, l_diag: f32) -> Result<Com
             .filter(|(r, t)| r.to_bits() != t.to_bits())
             .count(),
     })
+}
+
+/// `(H_ref, H)` pairs split into the creases (the [`CREASE_FRACTION`] with the smallest
+/// `H_ref`, ties broken by H) and the rest.
+fn split_creases(mut pairs: Vec<(f32, f32)>) -> (Vec<(f32, f32)>, Vec<(f32, f32)>) {
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    let count = (pairs.len() as f64 * CREASE_FRACTION).round() as usize;
+    let rest = pairs.split_off(count);
+    (pairs, rest)
+}
+
+/// The `q` quantile of `sorted` (nearest rank); NaN when it is empty.
+fn percentile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let rank = ((q * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
+    sorted[rank - 1]
 }
 
 /// The difference picture of SPEC §4: grey `1 − clamp(10 · s · |ΔH|)`, white where equal;
@@ -134,6 +186,23 @@ mod tests {
         let a = image(vec![1.0, 2.0, 3.0, 4.0]);
         let b = image(vec![1.5, 2.5, 3.5, 4.5]);
         assert!((f_diff(&a, &b, 20.0).unwrap().value - 100.0 * 0.5 / 20.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn bias_keeps_the_sign_and_creases_are_the_smallest_tenth() {
+        // Twenty pixels: H_ref = 1 … 20; the test image is 0.5 low on the two smallest (the
+        // creases) and 1 high on the rest.
+        let reference = image((1..=20).map(|i| i as f32).collect());
+        let test = image((1..=20).map(|i| i as f32 + if i <= 2 { -0.5 } else { 1.0 }).collect());
+        let c = compare(&reference, &test, 100.0).unwrap();
+        assert!((c.f_diff_creases - 0.5).abs() < 1e-12, "{c:?}");
+        assert!((c.f_diff_rest - 1.0).abs() < 1e-12, "{c:?}");
+        assert!((c.bias - (18.0 - 1.0) / 20.0).abs() < 1e-12, "{c:?}");
+        // Relative errors: 0.5, 0.25, then 1/3, 1/4 … 1/20; the 19th of 20 (nearest rank) is
+        // the second largest, 1/3.
+        assert!((c.p95_relative_error - 1.0 / 3.0).abs() < 1e-12, "{c:?}");
+        let low = compare(&reference, &image((1..=20).map(|i| i as f32 - 1.0).collect()), 100.0).unwrap();
+        assert!((low.bias + 1.0).abs() < 1e-12, "{low:?}");
     }
 
     #[test]

@@ -6,6 +6,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::accel::{BuildQuality, Kernel};
+pub use crate::denoise::DenoiseParams;
 use crate::error::{Error, Result};
 
 /// One AOV: a per-pixel companion of H, written as an EXR channel beside `Y` (SPEC §8;
@@ -96,6 +97,9 @@ pub struct RenderOptions {
     pub aovs: Vec<Aov>,
     /// Render only this shard's rows ([`crate::shard`]); `None` for the whole image.
     pub shard: Option<Shard>,
+    /// Filter the image with its neighbours' rays ([`crate::denoise`]); `None` for the
+    /// estimator's own pixels.
+    pub denoise: Option<DenoiseParams>,
 }
 
 impl Default for RenderOptions {
@@ -110,13 +114,14 @@ impl Default for RenderOptions {
             kernel: Kernel::best(),
             aovs: vec![],
             shard: None,
+            denoise: None,
         }
     }
 }
 
 impl RenderOptions {
-    /// Refuses an empty or oversized image, a non-positive `max_distance`, and zero threads or
-    /// more than [`max_threads`].
+    /// Refuses an empty or oversized image, a non-positive `max_distance`, bad denoising
+    /// parameters, and zero threads or more than [`max_threads`].
     pub fn validate(&self) -> Result<()> {
         let (w, h) = (self.width, self.height);
         if w == 0 || h == 0 {
@@ -128,6 +133,9 @@ impl RenderOptions {
             return Err(Error::invalid("size", message));
         }
         Error::check_positive("max_distance", self.max_distance)?;
+        if let Some(denoise) = &self.denoise {
+            denoise.validate()?;
+        }
         check_threads(self.threads)
     }
 }

@@ -15,7 +15,9 @@ use crate::accel::Hit;
 use crate::accel::{Accel, BuildQuality, RayCaster};
 use crate::error::{Error, Result};
 pub use crate::estimators::pass::estimate;
-use crate::estimators::{AovImage, AovSample, DistanceClamp, Estimate, EstimateContext, Estimator, GBuffer};
+use crate::estimators::{Aov, AovImage, AovSample, DistanceClamp, Estimate, EstimateContext, Estimator, GBuffer};
+use crate::denoise::{Guide, GUIDE_CHANNELS};
+use crate::estimators::Samples;
 use crate::image::HmdImage;
 use crate::options::in_pool;
 pub use crate::options::{RenderOptions, DEFAULT_SEED, DEFAULT_SIZE, MAX_PIXELS};
@@ -33,6 +35,9 @@ pub struct Rendered {
     /// Parameters, statistics and timings; `seconds.load` is 0 until the caller that loaded
     /// the scene adds it ([`RenderReport::add_load_seconds`]).
     pub report: RenderReport,
+    /// A shard's part of a denoised render: the filter's guide, for `merge` to filter the
+    /// joined image with (the part's `image` is then its own rays' H); `None` otherwise.
+    pub guide: Option<Guide>,
 }
 
 impl Rendered {
@@ -44,7 +49,19 @@ impl Rendered {
             .channels
             .first()
             .map_or(crate::image::exr::CHANNEL, String::as_str);
-        crate::image::exr::encode_as(channel, &self.image, &self.aovs, path)
+        let guide = self.guide.as_ref().map(Guide::channels).unwrap_or_default();
+        let mut channels: Vec<(&str, &[f32])> = vec![(channel, &self.image.data)];
+        channels.extend(self.aovs.iter().map(|aov| (aov.aov.name(), &aov.data[..])));
+        channels.extend(GUIDE_CHANNELS.iter().copied().zip(guide.iter().map(|c| &c[..])));
+        crate::image::exr::encode_channels(&channels, (self.image.width, self.image.height), path)
+    }
+
+    /// The channels a shard's rows hash covers: H, the AOVs, and the guide where there is one.
+    pub fn hashed_channels<'a>(image: &'a HmdImage, aovs: &'a [AovImage], guide: &'a [Vec<f32>]) -> Vec<&'a [f32]> {
+        std::iter::once(&image.data[..])
+            .chain(aovs.iter().map(|a| &a.data[..]))
+            .chain(guide.iter().map(|c| &c[..]))
+            .collect()
     }
 }
 
@@ -90,14 +107,46 @@ pub fn render_outputs(
             let message = format!("{} is not measured by {}", aov.name(), estimator.method());
             return Err(Error::invalid("aov", message));
         }
+        if options.denoise.is_some() {
+            check_denoise(*estimator, &options.aovs)?;
+        }
     }
     let pixels = options.width as u64 * options.height as u64;
     let what = format!("{}x{}", options.width, options.height);
-    let needed = image_bytes(pixels, options.aovs.len()) * estimators.len() as u128;
+    // The denoiser's guide (7 channels) and its two passes' state (10 floats each).
+    let channels = options.aovs.len() + if options.denoise.is_some() { 14 } else { 0 };
+    let needed = image_bytes(pixels, channels) * estimators.len() as u128;
     crate::memory::check(Some("size"), &what, needed, None)?;
     in_pool(options.threads, || {
         render_in_pool(scene, estimators, options, pass)
     })?
+}
+
+/// Refuses `--denoise` for an estimator whose pixels are not means of their own rays, and
+/// beside the `relerr` AOV, naming why.
+fn check_denoise(estimator: &dyn Estimator, aovs: &[Aov]) -> Result<()> {
+    if let Samples::Unsuited(why) = estimator.samples() {
+        let message = format!("cannot filter {}: {why}", estimator.method());
+        return Err(Error::invalid("denoise", message));
+    }
+    if aovs.contains(&Aov::Relerr) {
+        let message = "cannot go with the relerr AOV: relerr is the error bar of a pixel's own rays, \
+                       and a filtered pixel's error is mostly the filter's bias, which no per-pixel \
+                       figure measures (render without --denoise for relerr)";
+        return Err(Error::invalid("denoise", message));
+    }
+    Ok(())
+}
+
+/// The AOVs the estimators measure for `options`: those asked for, and `rays` where the
+/// denoiser needs each pixel's ray count.
+fn measured_aovs(estimators: &[&dyn Estimator], options: &RenderOptions) -> Vec<Aov> {
+    let mut aovs = options.aovs.clone();
+    let per_pixel = estimators.iter().any(|e| e.samples() == Samples::PerPixel);
+    if options.denoise.is_some() && per_pixel && !aovs.contains(&Aov::Rays) {
+        aovs.push(Aov::Rays);
+    }
+    aovs
 }
 
 fn render_in_pool(
@@ -128,12 +177,13 @@ fn render_in_pool(
     crate::interrupt::check()?;
 
     let bounds = scene.bounds();
+    let aovs = measured_aovs(estimators, options);
     let context = EstimateContext {
         accel: &accel,
         scene,
         seed: options.seed,
         clamp: DistanceClamp::for_diagonal(bounds.diagonal(), options.max_distance),
-        aovs: &options.aovs,
+        aovs: &aovs,
         whole_image: options.shard.is_none(),
         bvh,
     };
@@ -149,11 +199,91 @@ fn render_in_pool(
         scene_content: options.shard.map(|_| scene.fingerprint()),
     };
     let estimates = pass(&context, &gbuffer)?;
-    Ok(estimators
+    estimators
         .iter()
         .zip(estimates)
-        .map(|(estimator, (estimate, seconds))| output(scene, options, &setup, *estimator, estimate, seconds))
-        .collect())
+        .map(|(estimator, (estimate, seconds))| {
+            let (estimate, denoised) = denoise(*estimator, estimate, &gbuffer, options)?;
+            Ok(output(scene, options, &setup, *estimator, estimate, seconds, denoised))
+        })
+        .collect()
+}
+
+/// The denoiser's part of one output: the report's `denoise`, and a shard's guide.
+struct Denoised {
+    report: Option<crate::report::DenoiseReport>,
+    guide: Option<Guide>,
+}
+
+/// `estimate` filtered as `options.denoise` says (a whole image), or with the guide a shard's
+/// part carries for `merge`; the `rays` AOV taken out again where only the filter wanted it.
+fn denoise(
+    estimator: &dyn Estimator,
+    mut estimate: Estimate,
+    gbuffer: &GBuffer,
+    options: &RenderOptions,
+) -> Result<(Estimate, Denoised)> {
+    let Some(params) = options.denoise else {
+        return Ok((estimate, Denoised { report: None, guide: None }));
+    };
+    let start = Instant::now();
+    let samples = match estimator.samples() {
+        Samples::Fixed(n) => vec![n as f32; estimate.hmd.len()],
+        Samples::PerPixel => {
+            let rays = estimate.aovs.iter().position(|a| a.aov == Aov::Rays);
+            let rays = rays.expect("the rays AOV is measured for the denoiser");
+            if options.aovs.contains(&Aov::Rays) {
+                estimate.aovs[rays].data.clone()
+            } else {
+                estimate.aovs.remove(rays).data
+            }
+        }
+        Samples::Unsuited(_) => unreachable!("refused before the render"),
+    };
+    let guide = guide_of(gbuffer, samples);
+    let filtered = options.shard.is_none();
+    if filtered {
+        estimate.hmd = crate::denoise::filter(&estimate.hmd, &guide, &params);
+    }
+    let report = crate::report::DenoiseReport {
+        params,
+        filtered,
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    let guide = (!filtered).then_some(guide);
+    Ok((estimate, Denoised { report: Some(report), guide }))
+}
+
+/// The denoiser's guide of an image of `scene` rendered earlier at `width × height` through
+/// a BVH of preset `bvh` (the one its report names: at exact ties another preset's primary
+/// hits can differ), with `samples` rays per pixel: with it, [`crate::denoise::filter`] filters
+/// that image bit for bit as `render` with [`RenderOptions::denoise`] would have.
+pub fn guide(scene: &Scene, (width, height): (u32, u32), bvh: BuildQuality, samples: Vec<f32>) -> Result<Guide> {
+    RenderOptions {
+        width,
+        height,
+        ..RenderOptions::default()
+    }
+    .validate()?;
+    if samples.len() != width as usize * height as usize {
+        return Err(Error::parameter(format!("{} ray counts for {width}x{height} pixels", samples.len())));
+    }
+    scene.validate()?;
+    let (accel, _) = Accel::for_work(&scene.mesh, bvh, 0, crate::accel::Kernel::best())?;
+    Ok(guide_of(&primary_hits(&accel, scene, width, height), samples))
+}
+
+/// The denoiser's guide from the G-buffer (points and camera-facing normals, NaN for
+/// background) and each pixel's ray count.
+fn guide_of(gbuffer: &GBuffer, samples: Vec<f32>) -> Guide {
+    let none = glam::Vec3::NAN;
+    Guide {
+        width: gbuffer.width,
+        height: gbuffer.height,
+        points: gbuffer.points.iter().map(|p| p.as_ref().map_or(none, |h| h.point)).collect(),
+        normals: gbuffer.points.iter().map(|p| p.as_ref().map_or(none, |h| h.normal)).collect(),
+        samples,
+    }
 }
 
 /// The primary hits of the rows `options` renders (a shard's, or all), and how many of those
@@ -196,7 +326,9 @@ fn output(
     estimator: &dyn Estimator,
     estimate: Estimate,
     estimate_seconds: f64,
+    denoised: Denoised,
 ) -> Rendered {
+    let denoise_seconds = denoised.report.map_or(0.0, |d| d.seconds);
     let bounds = &setup.bounds;
     let parameters = estimator.parameters();
     let mut report = RenderReport {
@@ -226,8 +358,8 @@ fn output(
             accel_build: setup.accel_build,
             primary: setup.primary,
             estimate: estimate_seconds,
-            // The shared set-up (BVH, primary rays) and this output's own estimate.
-            total: setup.seconds + estimate_seconds,
+            // The shared set-up (BVH, primary rays), this output's own estimate and filter.
+            total: setup.seconds + estimate_seconds + denoise_seconds,
             phases: estimate.phases,
         },
         channels: std::iter::once(estimator.channel())
@@ -254,19 +386,20 @@ fn output(
         shards: None,
         rays: parameters.number("rays").map(|rays| rays as u32),
         parameters,
+        denoise: denoised.report,
         details: estimate.details,
     };
     let image = HmdImage::new(options.width, options.height, estimate.hmd);
     if let (Some(part), Some(shard)) = (report.shard.as_mut(), options.shard) {
-        let channels: Vec<&[f32]> = std::iter::once(&image.data[..])
-            .chain(estimate.aovs.iter().map(|a| &a.data[..]))
-            .collect();
+        let guide = denoised.guide.as_ref().map(Guide::channels).unwrap_or_default();
+        let channels = Rendered::hashed_channels(&image, &estimate.aovs, &guide);
         part.rows_hash = Some(shard.rows_hash(image.width, &channels));
     }
     Rendered {
         image,
         aovs: estimate.aovs,
         report,
+        guide: denoised.guide,
     }
 }
 
@@ -328,6 +461,7 @@ fn render_key(
         max_distance: options.max_distance,
         aovs: options.aovs.iter().map(|a| a.name().into()).collect(),
         ao_radius: details.ao_radius,
+        denoise: options.denoise,
     }
 }
 

@@ -12,6 +12,7 @@
 //! timings.
 
 use crate::error::{Error, Result};
+use crate::denoise::Guide;
 use crate::estimators::AovImage;
 use crate::image::HmdImage;
 pub use crate::options::Shard;
@@ -27,18 +28,36 @@ pub struct Part {
     pub aovs: Vec<AovImage>,
     /// Its report, with its [`ShardReport`].
     pub report: RenderReport,
+    /// The denoiser's guide, in a part of a denoised render ([`crate::denoise`]).
+    pub guide: Option<Guide>,
 }
 
 /// The one-machine image and report from every shard's part, in any order: the parts put in
 /// shard order and checked to be one render's, each EXR checked against its JSON, the rows
 /// joined, and the reports summed into the image's.
+///
+/// Parts of a denoised render carry their own rays' H and the filter's guide: the joined
+/// image is filtered here, as the one machine filters its image, so the bits are the same.
 pub fn merge(parts: Vec<Part>) -> Result<Rendered> {
     let parts = in_shard_order(parts)?;
     let count = parts.len() as u32;
     check_rows(&parts)?;
-    let (image, aovs) = join_rows(&parts)?;
-    let report = merged_report(&parts, count, image.width, image.height)?;
-    Ok(Rendered { image, aovs, report })
+    let (mut image, aovs, guide) = join_rows(&parts)?;
+    let mut report = merged_report(&parts, count, image.width, image.height)?;
+    if let Some(denoise) = report.denoise.as_mut().filter(|d| !d.filtered) {
+        let guide = guide.ok_or_else(|| Error::parameter("the parts of a denoised render lack their guide channels"))?;
+        let start = std::time::Instant::now();
+        image.data = crate::denoise::filter(&image.data, &guide, &denoise.params);
+        denoise.filtered = true;
+        denoise.seconds = start.elapsed().as_secs_f64();
+        report.seconds.total += denoise.seconds;
+    }
+    Ok(Rendered {
+        image,
+        aovs,
+        report,
+        guide: None,
+    })
 }
 
 /// `parts` in shard order, one of each shard of one render; refused (naming what is wrong)
@@ -95,9 +114,8 @@ fn check_rows(parts: &[Part]) -> Result<()> {
             )));
         }
         let expected = r.shard.as_ref().and_then(|s| s.rows_hash.as_deref());
-        let channels: Vec<&[f32]> = std::iter::once(&part.image.data[..])
-            .chain(part.aovs.iter().map(|a| &a.data[..]))
-            .collect();
+        let guide = part.guide.as_ref().map(Guide::channels).unwrap_or_default();
+        let channels = Rendered::hashed_channels(&part.image, &part.aovs, &guide);
         if expected.is_some_and(|h| h != shard.rows_hash(part.image.width, &channels)) {
             return Err(Error::parameter(format!(
                 "{what} is not the image its JSON describes (its rows hash differently): was it replaced, swapped or edited?"
@@ -107,23 +125,37 @@ fn check_rows(parts: &[Part]) -> Result<()> {
     Ok(())
 }
 
-/// H and the AOVs with each shard's rows from its part.
-fn join_rows(parts: &[Part]) -> Result<(HmdImage, Vec<AovImage>)> {
+/// H, the AOVs and the denoiser's guide (where the parts have one) with each shard's rows
+/// from its part.
+fn join_rows(parts: &[Part]) -> Result<(HmdImage, Vec<AovImage>, Option<Guide>)> {
     let count = parts.len() as u32;
     let (width, height) = (parts[0].image.width, parts[0].image.height);
     let mut image = parts[0].image.clone();
     let mut aovs = parts[0].aovs.clone();
+    let mut guide = parts[0].guide.clone();
     for (index, part) in parts.iter().enumerate() {
         let shard = Shard::new(index as u32, count)?;
+        if part.guide.is_some() != guide.is_some() {
+            return Err(Error::parameter(format!(
+                "shard {index}/{count} {} the denoiser's guide channels and shard 0/{count} {}",
+                if part.guide.is_some() { "has" } else { "lacks" },
+                if guide.is_some() { "has them" } else { "does not" },
+            )));
+        }
         for row in (0..height).filter(|&r| shard.has_row(r)) {
             let range = (row * width) as usize..((row + 1) * width) as usize;
             image.data[range.clone()].copy_from_slice(&part.image.data[range.clone()]);
             for (merged, own) in aovs.iter_mut().zip(&part.aovs) {
                 merged.data[range.clone()].copy_from_slice(&own.data[range.clone()]);
             }
+            if let (Some(merged), Some(own)) = (guide.as_mut(), part.guide.as_ref()) {
+                merged.points[range.clone()].copy_from_slice(&own.points[range.clone()]);
+                merged.normals[range.clone()].copy_from_slice(&own.normals[range.clone()]);
+                merged.samples[range.clone()].copy_from_slice(&own.samples[range.clone()]);
+            }
         }
     }
-    Ok((image, aovs))
+    Ok((image, aovs, guide))
 }
 
 /// The image's report from the parts' (shard order, `count` of them, `width` × `height`):

@@ -693,8 +693,8 @@ fn the_cost_plot_has_every_image_of_tables_1_to_3_and_its_front_is_the_undominat
     let p = Preset::Quick.params();
     assert_eq!(
         cost.rows.len(),
-        2 * p.rays.len() + 2 * p.photons.len() * p.nearest.len(),
-        "gather and cube map by N, methods I and II by photons and K:\n{}",
+        3 * p.rays.len() + 2 * p.photons.len() * p.nearest.len(),
+        "gather, gather + denoise and cube map by N, methods I and II by photons and K:\n{}",
         cost.csv()
     );
     // Each image's seconds are its table's: gather's Table 2's, a photon image's Table 3's
@@ -704,6 +704,10 @@ fn the_cost_plot_has_every_image_of_tables_1_to_3_and_its_front_is_the_undominat
         let ours = cost.rows.iter().find(|r| r[0] == "gather" && r[1] == n).unwrap();
         let (a, b) = (at(&cost, ours, "seconds"), at(&table2, row, "gather s"));
         assert!((a - b).abs() <= 1e-3 * b.max(1.0), "{a} against Table 2's {b}");
+        // The denoised gather costs its gather and the filter, and is its own image.
+        let denoised = cost.rows.iter().find(|r| r[0] == "gather + denoise" && r[1] == n).unwrap();
+        assert!(at(&cost, denoised, "seconds") > b, "{denoised:?}");
+        assert_ne!(at(&cost, denoised, "f_diff"), at(&cost, ours, "f_diff"), "{denoised:?}");
     }
     for row in &table3.rows {
         let k = row[table3.column("K").unwrap()].clone();

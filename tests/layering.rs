@@ -26,6 +26,8 @@ const FORBIDDEN: &[(&str, &[&str])] = &[
     ("options", &["render", "shard", "experiments", "cli"]),
     ("render", &["cache", "shard", "experiments", "cli"]),
     ("cache", &["shard", "experiments", "cli"]),
+    // The denoiser is image arithmetic over a guide: it knows no scene, ray or estimator.
+    ("denoise", &["accel", "scene", "estimators", "render", "shard", "experiments", "gpu", "points", "cli", "cache", "report", "options", "image"]),
 ];
 
 /// Every `.rs` file under `src/` by its module path (`lib.rs` is the root, `main.rs` is

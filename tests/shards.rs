@@ -30,6 +30,31 @@ fn four_shards_merged_in_any_order_give_the_one_machine_exr_byte_for_byte() {
             "gather",
             vec!["--size", "40x27", "--rays", "16", "--aov", "rays,dmin"],
         ),
+        // Denoised: the parts carry their own rays' H and the guide; merge filters.
+        (
+            "gather-denoise",
+            vec!["--size", "40x27", "--rays", "16", "--aov", "dmin", "--denoise"],
+        ),
+        (
+            "adaptive-denoise",
+            vec![
+                "--size",
+                "40x27",
+                "--method",
+                "adaptive",
+                "--tolerance",
+                "0.2",
+                "--min-rays",
+                "16",
+                "--denoise",
+                "--denoise-passes",
+                "2",
+            ],
+        ),
+        (
+            "cubemap-denoise",
+            vec!["--size", "40x27", "--method", "cubemap", "--backend", "cpu", "--rays", "16", "--denoise"],
+        ),
         // Not H: its channel is E, which merge must read and write as E.
         (
             "irradiance",
@@ -80,13 +105,19 @@ fn four_shards_merged_in_any_order_give_the_one_machine_exr_byte_for_byte() {
         for key in ["background_pixels", "method", "channels"] {
             assert_eq!(merged[key], one[key], "{name}: {key}");
         }
+        if name.ends_with("denoise") {
+            let part = common::cli::read_json(&dir.join("part0.json"));
+            assert_eq!(part["denoise"]["filtered"], false, "{name}: a part is not filtered");
+            assert_eq!(merged["denoise"]["filtered"], true, "{name}: the merge filters");
+            assert_eq!(merged["denoise"]["edge"], one["denoise"]["edge"], "{name}");
+        }
         // The merged report sums the rays the shards cast: gather's split the image's, while
         // each photon shard traces the whole map again.
         let shards_trace = if name == "photon2" { 4 } else { 1 };
         for key in ["rays_cast", "escaped_rays"] {
             assert_eq!(
                 merged[key],
-                shards_trace * one[key].as_u64().unwrap(),
+                serde_json::Value::from(one[key].as_u64().map(|n| shards_trace * n)),
                 "{name}: {key}"
             );
         }

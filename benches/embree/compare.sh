@@ -31,17 +31,23 @@
 #
 # Accuracy: the seconds each side needs for an image of a given f_diff, what a user waits
 # for. SCENES default "cube hall columns" (columns: benches/scenes/columns.py, a closed
-# room), SIDE² pixels (default 256). Per scene one shared reference (`hmdist render
-# --sampler grid --rays 16384`, its own seed); then for N = 16 … 2,048 rays, RUNS times
-# (default 3), interleaved: Embree (embree_gather.c: hmdist's jittered grid of strata, what a
-# hand-written gather casts; the fast build, each EMBREE_CASTS variant, default "4 8 16", the
-# fastest end to end; the fastest variant's median seconds), and hmdist with its defaults
-# (`render --rays N`, sobol); then hmdist's adaptive gathering (the stop that gives the least
-# f_diff per ray: `--tolerance 0 --abs-tolerance A --loosen 1`, A = 0.004 … 0.00025). Seconds
-# are the gather's (Embree's gather_s, hmdist's seconds.estimate), after the BVH and the
-# primary hits, which each pays once. For T = Embree's f_diff at 64, 256 and 1,024 rays: each
-# side's seconds to f_diff ≤ T (log-log between the points measured) and hmdist's as a
-# fraction of Embree's.
+# room), SIDE² pixels (default 256). Per scene one shared reference (`hmdist render --rays
+# 8192`, its own seed); then for N = 16 … 2,048 rays, RUNS times (default 3), interleaved:
+# Embree (embree_gather.c: hmdist's jittered grid of strata, what a hand-written gather
+# casts; the fast build, each EMBREE_CASTS variant, default "4 8 16", the fastest end to
+# end; the fastest variant's median seconds); Embree + Intel Open Image Denoise
+# (oidn_filter.py on Embree's 1/t, normals as the guide: Embree's seconds and the filter's);
+# hmdist with its defaults (`render --rays N`, sobol) and with `--denoise` (the filter's
+# seconds added); then hmdist's adaptive gathering (the stop that gives the least f_diff per
+# ray: `--tolerance 0 --abs-tolerance A --loosen 1`, A = 0.004 … 0.00025). Seconds are the
+# gather's (Embree's gather_s, hmdist's seconds.estimate), after the BVH and the primary
+# hits, which each pays once. Each image's f_diff, signed bias, f_diff over the creases (the
+# tenth of the pixels with the smallest reference H) and over the rest, and p95 of |ΔH|/H
+# (`hmdist diff`). For T = Embree's f_diff at 64, 256 and 1,024 rays: each side's seconds to
+# f_diff ≤ T (log-log between the points measured) as a fraction of Embree's, and its p95
+# there against Embree's. The pictures of each scene (reference, Embree at 256 rays, hmdist
+# at 64 with --denoise, and their differences) go to $HMDIST_COMPARE_PICTURES (default: the
+# work folder) as SCENE-denoise.png.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 mode=cast
@@ -90,24 +96,38 @@ if [ "$mode" = cast ] && { [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -
     python3 -m venv "$venv"
     "$venv/bin/pip" install -q open3d-cpu numpy
 fi
+if [ "$mode" = accuracy ] && { [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c 'import pyoidn, OpenEXR, PIL' 2>/dev/null; }; then
+    [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
+    "$venv/bin/pip" install -q pyoidn numpy OpenEXR pillow
+fi
 (cd "$root" && cargo build --release -q --example gather_rays --bin hmdist)
 hmdist="$root/target/release/hmdist"
 gather_rays="$root/target/release/examples/gather_rays"
 
 if [ "$mode" = accuracy ]; then
-    f_diff() { "$hmdist" diff "$1" "$2" --scene "$3" | awk '/^f_diff:/ { print $2 }'; }
+    # f_diff, bias, creases, rest and p95 of TEST against REF, as log fields.
+    metrics() { # REF TEST SCENE
+        "$hmdist" diff "$1" "$2" --scene "$3" | awk -F': *' '
+            $1 == "f_diff" { f = $2 } $1 == "bias" { b = $2 } $1 == "f_diff, creases" { c = $2 }
+            $1 == "f_diff, the rest" { r = $2 } $1 == "p95 relative error" { p = $2 }
+            END { print "f_diff", f, "bias", b, "creases", c, "rest", r, "p95", p }'
+    }
     # One hmdist image of the scene into the log as NAME: its rays per pixel (the mean, for
-    # adaptive), its gather seconds and, in the first run, its f_diff.
-    hmdist_point() { # NAME RENDER-FLAGS...
-        local name="$1" n seconds error=""
-        shift
+    # adaptive), its gather seconds (with the filter's, if denoised) and, in the first run,
+    # its errors. KEEP names a copy of the image to keep.
+    hmdist_point() { # NAME KEEP RENDER-FLAGS...
+        local name="$1" keep="$2" n seconds error=""
+        shift 2
         "$hmdist" render --quiet --scene "$scene" --size "${side}x$side" --threads "$threads" "$@" \
             --out "$work/h.exr" --json "$work/h.json" >/dev/null
         read -r n seconds < <(python3 -c 'import json, sys; d = json.load(open(sys.argv[1]))
-print(round(d.get("mean_rays_per_pixel") or d["rays"]), d["seconds"]["estimate"])' "$work/h.json")
-        [ "$run" = 1 ] && error="f_diff $(f_diff "$reference" "$work/h.exr" "$scene")"
+print(round(d.get("mean_rays_per_pixel") or d["rays"]), d["seconds"]["estimate"] + (d.get("denoise") or {}).get("seconds", 0))' "$work/h.json")
+        [ "$run" = 1 ] && error="$(metrics "$reference" "$work/h.exr" "$scene")"
+        [ -n "$keep" ] && cp "$work/h.exr" "$work/$keep"
         echo "$name n $n gather_s $seconds $error" >>"$log"
     }
+    pictures="${HMDIST_COMPARE_PICTURES:-$work}"
+    mkdir -p "$pictures"
     for scene in $cases; do
         name="$(basename "$scene")"
         if [ "$scene" = columns ]; then
@@ -119,26 +139,36 @@ print(round(d.get("mean_rays_per_pixel") or d["rays"]), d["seconds"]["estimate"]
         [ -f "$points" ] || "$gather_rays" points "$scene" "$side" "$points"
         [ -f "$obj" ] || "$hmdist" scene export "$scene" "$obj" >/dev/null
         [ -f "$reference" ] || "$hmdist" render --quiet --scene "$scene" --size "${side}x$side" \
-            --rays 16384 --sampler grid --seed 1000003 --out "$reference" >/dev/null
+            --rays 8192 --seed 1000003 --out "$reference" >/dev/null
         log="$work/$name-$side-accuracy.log"
         : >"$log"
         for run in $(seq "$runs"); do
             for n in 16 32 64 128 256 512 1024 2048; do
-                hmdist_point hmdist_gather --rays "$n"
+                keep=""
+                [ "$n" = 64 ] && keep="denoise-64.exr"
+                hmdist_point hmdist_gather "" --rays "$n"
+                hmdist_point hmdist_denoise "$keep" --rays "$n" --denoise
                 for cast in $casts; do
                     EMBREE_HMD_OUT="$work/e.f32" "$work/embree_gather" "$obj" "$points" "$n" "$threads" fast "$cast" |
                         awk -v n="$n" '{ $1 = $1 " n " n; print }' >>"$log"
                 done
+                "$venv/bin/python" "$here/oidn_filter.py" "$points" "$side" "$work/e.f32" "$work/o.f32" |
+                    awk -v n="$n" '{ print "oidn n " n " " $0 }' >>"$log"
                 if [ "$run" = 1 ]; then
                     "$gather_rays" exr "$side" "$points" "$work/e.f32" "$work/e.exr"
-                    echo "embree n $n f_diff $(f_diff "$reference" "$work/e.exr" "$scene")" >>"$log"
+                    "$gather_rays" exr "$side" "$points" "$work/o.f32" "$work/o.exr"
+                    echo "embree n $n $(metrics "$reference" "$work/e.exr" "$scene")" >>"$log"
+                    echo "embree_oidn n $n $(metrics "$reference" "$work/o.exr" "$scene")" >>"$log"
+                    [ "$n" = 256 ] && cp "$work/e.exr" "$work/embree-256.exr"
                 fi
             done
             for a in 0.004 0.002 0.001 0.0005 0.00025; do
-                hmdist_point hmdist_adaptive --method adaptive --tolerance 0 --abs-tolerance "$a" \
+                hmdist_point hmdist_adaptive "" --method adaptive --tolerance 0 --abs-tolerance "$a" \
                     --loosen 1 --min-rays 64 --max-rays 8192
             done
         done
+        "$venv/bin/python" "$here/denoise_pictures.py" "$reference" "$work/embree-256.exr" "$work/denoise-64.exr" \
+            "$("$hmdist" scene info "$scene" | awk -F': *' '/display scale/ { print $2 }')" "$pictures/$name-denoise.png"
         python3 "$here/accuracy_summary.py" "$log" "$name" "$side" "$threads"
     done
     exit 0

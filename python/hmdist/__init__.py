@@ -185,7 +185,9 @@ class Scene:
         with underscores: the render's own (size, seed, threads, max_distance, bvh) and the
         method's (gather: rays, weighting, rounds, ao_radius, backend; cubemap: cube_res, ...;
         photon1/photon2: photons, nearest (or its older name gather), source, photon_map, ...;
-        irradiance: see `irradiance`). A name the method does not read is a ValueError. With
+        irradiance: see `irradiance`). `denoise=True` filters H with its neighbours' rays
+        (gather, adaptive, cubemap; `denoise_passes`, `denoise_radius`, `denoise_edge` as the
+        CLI's `--denoise-*`). A name the method does not read is a ValueError. With
         `aov` (names: relerr, rays, dmin, ao, escaped; E_direct for irradiance) a third value
         is returned: a dict of float32 [height, width] arrays by name.
 

@@ -806,6 +806,9 @@ fn configure(
         ..RenderOptions::default()
     };
     let mut method_params = serde_json::Map::new();
+    // `denoise=True` and the filter's own keywords, which need it.
+    let (mut denoise, mut filter) = (false, hmdist::denoise::DenoiseParams::default());
+    let mut filter_keys = vec![];
     for (key, value) in params.iter() {
         let key: String = key.extract()?;
         let bad = |e: PyErr| value_error(format!("{key}: {e}"));
@@ -815,12 +818,26 @@ fn configure(
             "max_distance" => o.max_distance = value.extract().map_err(bad)?,
             "size" => (o.width, o.height) = value.extract().map_err(bad)?,
             "bvh" => o.bvh_quality = named(&key, &value.extract::<String>().map_err(bad)?)?,
+            "denoise" => denoise = value.extract().map_err(bad)?,
+            "denoise_passes" => filter.passes = value.extract().map_err(bad)?,
+            "denoise_radius" => filter.radius = value.extract().map_err(bad)?,
+            "denoise_edge" => filter.edge = value.extract().map_err(bad)?,
             _ => {
                 let value = json_value(&key, &value)?;
                 method_params.insert(key, value);
             }
         }
     }
+    for key in params.keys() {
+        let key: String = key.extract()?;
+        if key.starts_with("denoise_") {
+            filter_keys.push(key);
+        }
+    }
+    if !denoise && !filter_keys.is_empty() {
+        return Err(value_error(format!("{} needs denoise=True", filter_keys.join(", "))));
+    }
+    o.denoise = denoise.then_some(filter);
     let entry = registry::method(method).map_err(py_error)?;
     let estimator = entry.build(&method_params, aovs).map_err(py_error)?;
     Ok((estimator, o))

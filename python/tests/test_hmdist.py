@@ -62,6 +62,25 @@ def test_render_equals_the_clis_exr_bit_for_bit(tmp_path: Path, method: str, arg
 
 
 @needs_cli
+def test_denoise_equals_the_clis_exr_and_refuses_by_name(tmp_path: Path) -> None:
+    exr = tmp_path / "d.exr"
+    subprocess.run([CLI, "render", "--quiet", "--size", "40x30", "--rays", "16", "--denoise",
+                    "--denoise-edge", "8", "--out", str(exr)], check=True)
+    s = hmdist.Scene.builtin("cube")
+    H, report = s.render(size=(40, 30), rays=16, denoise=True, denoise_edge=8.0)
+    assert np.array_equal(hmdist.read_exr(exr).view(np.uint32), H.view(np.uint32))
+    assert report["denoise"]["filtered"] and report["denoise"]["edge"] == 8.0
+    plain, _ = s.render(size=(40, 30), rays=16)
+    assert not np.array_equal(plain, H)
+    with pytest.raises(ValueError, match="needs denoise=True"):
+        s.render(size=(8, 8), rays=4, denoise_passes=2)
+    with pytest.raises(ValueError, match="denoise_passes must be 1 to 10"):
+        s.render(size=(8, 8), rays=4, denoise=True, denoise_passes=0)
+    with pytest.raises(ValueError, match="cannot filter photon1"):
+        s.render(method="photon1", size=(8, 8), photons=1000, denoise=True)
+
+
+@needs_cli
 def test_irradiance_equals_the_clis_exr_and_needs_a_light(tmp_path: Path) -> None:
     exr = tmp_path / "e.exr"
     subprocess.run([CLI, "render", "--quiet", "--method", "irradiance", "--size", "24x18", "--rays", "16",

@@ -61,6 +61,10 @@ pub fn run(args: DiffArgs) -> Result<ExitCode> {
     println!("f_diff:              {:.6}", c.f_diff.value);
     println!("rmse:                {:.6}", c.rmse);
     println!("mean relative error: {:.6}", c.mean_relative_error);
+    println!("p95 relative error:  {:.6}", c.p95_relative_error);
+    println!("bias:                {:.6}", c.bias);
+    println!("f_diff, creases:     {:.6}", c.f_diff_creases);
+    println!("f_diff, the rest:    {:.6}", c.f_diff_rest);
     println!("pixels compared:     {}", c.f_diff.compared);
     println!("pixels excluded:     {}", c.f_diff.excluded);
     println!("l_diag:              {l_diag}");

@@ -49,7 +49,17 @@ fn read_part(path: &std::path::Path) -> Result<Part> {
             })
         })
         .collect::<Result<Vec<_>>>()?;
-    Ok(Part { image, aovs, report })
+    // A part of a denoised render carries the filter's guide for the merge to filter with.
+    let guide = match &report.denoise {
+        Some(denoise) if !denoise.filtered => Some(exr::read_guide(path)?),
+        _ => None,
+    };
+    Ok(Part {
+        image,
+        aovs,
+        report,
+        guide,
+    })
 }
 
 pub fn run(args: MergeArgs) -> Result<()> {

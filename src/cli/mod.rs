@@ -6,6 +6,7 @@
 
 mod bar;
 mod cache;
+mod denoise_args;
 mod diff;
 mod experiment;
 mod gpu;

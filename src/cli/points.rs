@@ -52,11 +52,20 @@ pub struct PointsArgs {
     #[arg(long, value_name = "D")]
     max_distance: Option<f32>,
     /// No progress messages and no summary line.
+    /// Refused: the denoising filter averages an image's neighbouring pixels, and a list of
+    /// points has no neighbours (render an image with `render --denoise`).
+    #[arg(long, hide = true)]
+    denoise: bool,
     #[arg(long)]
     quiet: bool,
 }
 
 pub fn run(args: PointsArgs) -> Result<()> {
+    if args.denoise {
+        let message = "cannot filter H at points: the filter averages an image's neighbouring pixels on one \
+                       surface, and a list of points has no neighbours (render an image with `render --denoise`)";
+        return Err(hmdist::error::Error::invalid("denoise", message));
+    }
     let query = PointQuery::new(
         Gather::new(args.rays, args.weighting)?
             .with_backend(args.backend)

@@ -62,9 +62,12 @@ pub struct RenderArgs {
     /// A false-colour PNG of an AOV, with a legend (repeatable); adds the AOV if not asked for.
     #[arg(long, num_args = 2, value_names = ["NAME", "FILE"], help_heading = "AOVs and adaptive")]
     png_aov: Vec<String>,
-    /// Render only shard K of M: the rows r with r mod M = K, for `hmdist merge`.
+    /// Render only shard K of M: the rows r with r mod M = K, for `hmdist merge` (a denoised
+    /// shard's part holds its own rays' H and the filter's guide; the merge filters).
     #[arg(long, value_name = "K/M", value_parser = parse_shard)]
     shard: Option<Shard>,
+    #[command(flatten)]
+    denoise: super::denoise_args::DenoiseArgs,
     /// No progress bar and no summary line.
     #[arg(long)]
     quiet: bool,
@@ -137,6 +140,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         max_distance: args.max_distance,
         aovs,
         shard: args.shard,
+        denoise: args.denoise.params(),
         ..args.image.options()?
     };
     options.validate()?;

@@ -258,6 +258,10 @@ impl Estimator for Adaptive {
         &Aov::OF_GATHER
     }
 
+    fn samples(&self) -> super::Samples {
+        super::Samples::PerPixel
+    }
+
     fn expected_rays(&self, pixels: u64) -> u64 {
         pixels * self.min_rays as u64 * 4
     }

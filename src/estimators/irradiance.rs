@@ -230,6 +230,10 @@ impl Estimator for Irradiance {
         &[Aov::EDirect]
     }
 
+    fn samples(&self) -> super::Samples {
+        super::Samples::Unsuited("it filters H's mean of 1/d, and this image is irradiance, not H")
+    }
+
     fn expected_rays(&self, pixels: u64) -> u64 {
         // Gather rays, and a shadow ray from each that hits.
         2 * pixels * self.params.rays as u64

@@ -231,6 +231,17 @@ pub trait PixelWorker {
     fn pixel(&mut self, hit: &Hit, pixel: u64, tally: &mut Tally, aov: &mut AovSample) -> f32;
 }
 
+/// How many independent rays a pixel's H averages: what the denoiser's noise model needs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Samples {
+    /// The same number at every pixel (`gather`, the cube map's lookups).
+    Fixed(u32),
+    /// Each pixel's own number, its `rays` AOV (`adaptive`).
+    PerPixel,
+    /// The filter does not suit the estimator, for the reason given.
+    Unsuited(&'static str),
+}
+
 /// One way of computing H per pixel.
 pub trait Estimator: Sync {
     /// The method's name as the registry spells it (`gather`, `cubemap`, ...).
@@ -254,6 +265,12 @@ pub trait Estimator: Sync {
     /// The AOVs it can measure; asking for another is refused before the render.
     fn aovs(&self) -> &'static [Aov] {
         &[]
+    }
+
+    /// How many independent rays each pixel's H averages, for `--denoise`
+    /// ([`crate::denoise`]); the default refuses the filter, saying why.
+    fn samples(&self) -> Samples {
+        Samples::Unsuited("its pixels are not means of their own rays")
     }
 
     /// About how many rays the estimator will cast for an image of `pixels` surface pixels

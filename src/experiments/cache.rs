@@ -187,7 +187,12 @@ impl Runner<'_> {
                         data: image.data,
                     })
                     .collect();
-                output.push(crate::shard::Part { image, aovs, report });
+                output.push(crate::shard::Part {
+                    image,
+                    aovs,
+                    report,
+                    guide: None,
+                });
             }
             files.extend(paths.into_iter().flat_map(|(exr, json)| [exr, json]));
         }
@@ -250,6 +255,7 @@ impl Runner<'_> {
             max_distance: options.max_distance,
             aovs: aovs.iter().map(|a| a.name().into()).collect(),
             ao_radius: None,
+            denoise: options.denoise,
         }
     }
 

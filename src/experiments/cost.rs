@@ -14,6 +14,8 @@ use super::plot::{log_log_with, Marks, Series};
 use super::runner::Runner;
 use super::section::Section;
 use super::table::Table;
+use crate::accel::BuildQuality;
+use crate::denoise::DenoiseParams;
 use crate::error::Result;
 
 /// One image's accuracy and cost.
@@ -123,7 +125,8 @@ fn column_like(table: &Table, start: &str, end: &str) -> Option<String> {
         .cloned()
 }
 
-/// Every image of Tables 1–3 in `runner.out` with its f_diff and seconds, and the tables that
+/// Every image of Tables 1–3 in `runner.out` with its f_diff and seconds (and Table 1's gathers
+/// denoised: [`denoised`]), and the tables that
 /// were not there.
 fn cost_points(runner: &Runner) -> Result<(Vec<CostPoint>, Vec<&'static str>)> {
     let read = |name: &str| Table::read_csv(&runner.out.join(format!("{name}.csv")));
@@ -135,6 +138,7 @@ fn cost_points(runner: &Runner) -> Result<(Vec<CostPoint>, Vec<&'static str>)> {
         .map(|(name, _)| name)
         .collect();
     let mut points = vec![];
+    let mut gathers = vec![];
     if let (Some(t1), Some(t2)) = (&table1, &table2) {
         let cube_f = column_like(t1, "cubemap", " f_diff");
         let cube_s = column_like(t2, "cubemap", " s");
@@ -158,6 +162,9 @@ fn cost_points(runner: &Runner) -> Result<(Vec<CostPoint>, Vec<&'static str>)> {
                 let f_diff = f_column.and_then(|c| number(t1, row, c));
                 let seconds = s_column.and_then(|c| number(t2, timed, c));
                 if let (Some(f_diff), Some(seconds)) = (f_diff, seconds) {
+                    if estimator == "gather" {
+                        gathers.push((rays as u32, seconds));
+                    }
                     points.push(CostPoint {
                         estimator,
                         setting: format!("N = {rays}"),
@@ -214,11 +221,50 @@ fn cost_points(runner: &Runner) -> Result<(Vec<CostPoint>, Vec<&'static str>)> {
             }
         }
     }
+    points.extend(denoised(runner, &gathers)?);
     Ok((points, missing))
 }
 
-/// The estimators in the plots' order (and colours).
-const ESTIMATORS: [&str; 4] = ["gather", "cube map", "photon I", "photon II"];
+/// Table 1's gather images (`gathers`: rays and Table 2's seconds) filtered as `render
+/// --denoise` filters them ([`crate::denoise`], default parameters): f_diff against the run's
+/// reference, at the gather's seconds and the filter's (timed here, on the cached images). None
+/// in a plan, which renders nothing.
+fn denoised(runner: &Runner, gathers: &[(u32, f64)]) -> Result<Vec<CostPoint>> {
+    if runner.plan.is_some() || gathers.is_empty() {
+        return Ok(vec![]);
+    }
+    let reference = super::rays::reference(runner)?;
+    let l_diag = runner.scene.diagonal();
+    let size = (runner.params.size, runner.params.size);
+    let mut guides: Vec<(String, crate::denoise::Guide)> = vec![];
+    let mut points = vec![];
+    for &(rays, gather_seconds) in gathers {
+        let (image, report) = runner.method_image("gather", &super::rays::gather_params(rays), 1)?;
+        // One guide per BVH preset the images were rendered with (their primary hits).
+        if !guides.iter().any(|(bvh, _)| *bvh == report.bvh) {
+            let bvh = if report.bvh == "high" { BuildQuality::High } else { BuildQuality::Fast };
+            let samples = vec![1.0; image.data.len()];
+            guides.push((report.bvh.clone(), crate::render::guide(&runner.scene, size, bvh, samples)?));
+        }
+        let guide = &mut guides.iter_mut().find(|(bvh, _)| *bvh == report.bvh).expect("made above").1;
+        guide.samples.fill(rays as f32);
+        let start = std::time::Instant::now();
+        let filtered = crate::denoise::filter(&image.data, guide, &DenoiseParams::default());
+        let seconds = start.elapsed().as_secs_f64();
+        let filtered = crate::image::HmdImage::new(image.width, image.height, filtered);
+        points.push(CostPoint {
+            estimator: "gather + denoise",
+            setting: format!("N = {rays}"),
+            f_diff: crate::metrics::f_diff(&reference, &filtered, l_diag)?.value,
+            seconds: gather_seconds + seconds,
+            paper_seconds: None,
+        });
+    }
+    Ok(points)
+}
+
+/// The estimators in the plots' order (and colours): the paper's four, then ours.
+const ESTIMATORS: [&str; 5] = ["gather", "cube map", "photon I", "photon II", "gather + denoise"];
 
 /// The points of `estimator` as a series at `seconds`.
 fn series_of(points: &[CostPoint], estimator: &str, seconds: impl Fn(&CostPoint) -> Option<f64>) -> Series {
@@ -361,7 +407,7 @@ fn cost_tables(
     size: u32,
 ) -> (Table, Table) {
     let mut table = Table::new(
-        &format!("Accuracy against cost, {size}², `{scene}`: every image of Tables 1–3"),
+        &format!("Accuracy against cost, {size}², `{scene}`: every image of Tables 1–3, and Table 1's gathers denoised"),
         &[
             "estimator",
             "setting",

@@ -73,7 +73,7 @@ impl RaySweep {
 
 /// `gather` with `rays` rays (on the runner's backend), on the jittered grid of the paper's
 /// sampling (SPEC §3.1), named so that its images and their cache keys stay as published.
-fn gather_params(rays: u32) -> GatherParams {
+pub(super) fn gather_params(rays: u32) -> GatherParams {
     GatherParams {
         rays,
         sampler: Sampler::Grid,

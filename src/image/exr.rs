@@ -73,6 +73,18 @@ pub fn read_channel(path: &Path, name: &str) -> Result<HmdImage> {
     read_named(path, name, false)
 }
 
+/// Reads the denoiser's guide ([`crate::denoise::GUIDE_CHANNELS`]) from a shard's part of a
+/// denoised render.
+pub fn read_guide(path: &Path) -> Result<crate::denoise::Guide> {
+    let channels = crate::denoise::GUIDE_CHANNELS
+        .iter()
+        .map(|name| read_channel(path, name))
+        .collect::<Result<Vec<_>>>()?;
+    let (width, height) = (channels[0].width, channels[0].height);
+    let data: Vec<Vec<f32>> = channels.into_iter().map(|c| c.data).collect();
+    crate::denoise::Guide::from_channels(width, height, &data).map_err(|e| HmdError::file(path, e.to_string()))
+}
+
 /// Reads an EXR written by hmdist (or any EXR whose first layer has a `Y` channel, or a
 /// single channel): its `Y`, or its `E` where it has no `Y` (an irradiance image).
 pub fn read(path: &Path) -> Result<HmdImage> {

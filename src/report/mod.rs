@@ -11,6 +11,7 @@ use std::collections::BTreeMap;
 
 use serde_json::Value;
 
+use crate::denoise::DenoiseParams;
 use crate::scene::{Bounds, Camera, SpotLight};
 
 /// One rendered image's report: the JSON sidecar.
@@ -74,9 +75,26 @@ pub struct RenderReport {
     /// The method's parameters.
     #[serde(default)]
     pub parameters: Parameters,
+    /// The denoising filter, where the image was filtered (`--denoise`); absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub denoise: Option<DenoiseReport>,
     /// The method's own figures.
     #[serde(flatten)]
     pub details: Details,
+}
+
+/// The denoising filter of an image ([`crate::denoise`]): its parameters, whether the image's
+/// `Y` is filtered, and the filter's seconds.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DenoiseReport {
+    /// The filter's parameters.
+    #[serde(flatten)]
+    pub params: DenoiseParams,
+    /// `true` in a filtered image; `false` in a shard's part, whose `Y` is its own rays' H
+    /// and whose guide channels `hmdist merge` filters the joined image with.
+    pub filtered: bool,
+    /// Seconds the filter took (0 in a shard's part).
+    pub seconds: f64,
 }
 
 impl RenderReport {
@@ -218,6 +236,10 @@ pub struct RenderKey {
     pub aovs: Vec<String>,
     /// The `ao` AOV's radius, where it was computed.
     pub ao_radius: Option<f32>,
+    /// The denoising filter's parameters; absent (not `null`: keys written before the filter
+    /// existed keep their digests) for an image that is not filtered.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub denoise: Option<DenoiseParams>,
 }
 
 impl RenderKey {

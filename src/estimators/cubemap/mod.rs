@@ -36,6 +36,11 @@ impl Estimator for Cubemap {
         Parameters::of(&self.params(), &["backend"])
     }
 
+    fn samples(&self) -> crate::estimators::Samples {
+        // Each pixel's lookups are its gather's directions in a hemicube of its own.
+        crate::estimators::Samples::Fixed(self.gather.rays_per_point())
+    }
+
     fn expected_rays(&self, pixels: u64) -> u64 {
         // The CPU backend casts at most one ray per gather direction (one per texel looked
         // up), the GPU's rays fill one per direction; rasterising casts none.

@@ -367,6 +367,10 @@ impl Estimator for Gather {
         &Aov::OF_GATHER
     }
 
+    fn samples(&self) -> super::Samples {
+        super::Samples::Fixed(self.rays)
+    }
+
     fn expected_rays(&self, pixels: u64) -> u64 {
         pixels * self.rays as u64
     }

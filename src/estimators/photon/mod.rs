@@ -226,6 +226,7 @@ impl PhotonEstimator {
             max_distance: None,
             aovs: vec![],
             ao_radius: None,
+            denoise: None,
         };
         key.digest()
     }
@@ -324,6 +325,12 @@ fn check_memory(method: PhotonMethod, photons: usize) -> Result<()> {
 impl Estimator for PhotonEstimator {
     fn method(&self) -> &'static str {
         self.method.name()
+    }
+
+    fn samples(&self) -> crate::estimators::Samples {
+        crate::estimators::Samples::Unsuited(
+            "neighbouring pixels gather the same photons, so their errors are not independent, which the filter's noise model assumes",
+        )
     }
 
     fn expected_rays(&self, _pixels: u64) -> u64 {
