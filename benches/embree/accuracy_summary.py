@@ -21,6 +21,7 @@ NAMES = {
     "hmdist_gather": "hmdist render (defaults: sobol)",
     "hmdist_denoise": "hmdist render --denoise",
     "hmdist_adaptive": "hmdist adaptive (--abs-tolerance, loosen 1; N: mean rays cast)",
+    "hmdist_adaptive_denoise": "hmdist adaptive --denoise (--tolerance, loosen 0.5; N: mean rays cast)",
 }
 
 
@@ -52,8 +53,8 @@ def read(log):
 
 
 def at_error(curve, target, value):
-    """`value(point)` (log-log) where f_diff <= target: interpolated between the two N that
-    bracket it (the end segments extended beyond the N measured, marked with a *)."""
+    """`value(point)` (log-log) where f_diff = target, between the two N that bracket it (the
+    caller checks that two do)."""
     points = [(math.log(e["f_diff"]), math.log(max(value(p), 1e-12))) for p in curve for e in [p[2]]]
     for i in range(1, len(points)):
         (e0, _), (e1, _) = points[i - 1], points[i]
@@ -76,19 +77,40 @@ def main():
             print(f"    N={n:5} f_diff {e['f_diff']:.4f} bias {e['bias']:+.4f} creases {e['creases']:.4f} "
                   f"rest {e['rest']:.4f} p95 {e['p95']:.4f}  {s:8.3f} s{extra}")
     embree = {n: e for n, _, e, _ in curves["embree"]}
-    print("  seconds to f_diff <= T (* extrapolated), x Embree's; p95 there, against Embree's at N")
+    print("  seconds to f_diff <= T (log-log between the N measured), x Embree's; p95 there, against Embree's at N")
     for n in TARGETS:
         if n not in embree:
             continue
         target = embree[n]["f_diff"]
         print(f"    T = {target:.4f} (Embree's N={n}, p95 {embree[n]['p95']:.4f}):")
         base, _ = at_error(curves["embree"], target, lambda p: p[1])
-        for side_name in ("embree", "embree_oidn", "hmdist_gather", "hmdist_denoise", "hmdist_adaptive"):
+        for side_name in ("embree", "embree_oidn", "hmdist_gather", "hmdist_denoise", "hmdist_adaptive",
+                          "hmdist_adaptive_denoise"):
             if side_name not in curves:
                 continue
-            s, outside = at_error(curves[side_name], target, lambda p: p[1])
-            p95, _ = at_error(curves[side_name], target, lambda p: p[2]["p95"])
-            print(f"      {side_name:16} {s:8.3f} s{'*' if outside else ' '} (x{s / base:.2f})  p95 {p95:.4f}")
+            curve = curves[side_name]
+            first, best = curve[0], min(curve, key=lambda p: p[2]["f_diff"])
+            if first[2]["f_diff"] <= target:
+                # Below T at the fewest rays measured: at most that many seconds (not
+                # extrapolated towards fewer rays).
+                s, p95 = first[1], first[2]["p95"]
+                print(f"      {side_name:16} <= {s:.3f} s (x{s / base:.2f} at most; N={first[0]} is below T)  p95 {p95:.4f}")
+                continue
+            if best[2]["f_diff"] > target:
+                print(f"      {side_name:16} not reached: its least f_diff is {best[2]['f_diff']:.4f} (N={best[0]})")
+                continue
+            s, _ = at_error(curve, target, lambda p: p[1])
+            p95, _ = at_error(curve, target, lambda p: p[2]["p95"])
+            print(f"      {side_name:16} {s:8.3f} s (x{s / base:.2f})  p95 {p95:.4f}")
+        print(f"    the fewest seconds of a measured image with f_diff <= {target:.4f} and p95 <= {embree[n]['p95']:.4f}:")
+        for side_name, curve in curves.items():
+            both = [p for p in curve if p[2]["f_diff"] <= target and p[2]["p95"] <= embree[n]["p95"]]
+            if both:
+                p = min(both, key=lambda p: p[1])
+                print(f"      {side_name:24} {p[1]:8.3f} s (x{p[1] / base:.2f}) at N={p[0]}: "
+                      f"f_diff {p[2]['f_diff']:.4f}, p95 {p[2]['p95']:.4f}")
+            else:
+                print(f"      {side_name:24} none")
 
 
 if __name__ == "__main__":

@@ -39,7 +39,9 @@
 # (oidn_filter.py on Embree's 1/t, normals as the guide: Embree's seconds and the filter's);
 # hmdist with its defaults (`render --rays N`, sobol) and with `--denoise` (the filter's
 # seconds added); then hmdist's adaptive gathering (the stop that gives the least f_diff per
-# ray: `--tolerance 0 --abs-tolerance A --loosen 1`, A = 0.004 … 0.00025). Seconds are the
+# ray: `--tolerance 0 --abs-tolerance A --loosen 1`, A = 0.004 … 0.00025), and adaptive
+# with a relative stop and the filter (`--tolerance T --loosen 0.5 --min-rays 64 --denoise`,
+# T = 0.2 … 0.02). Seconds are the
 # gather's (Embree's gather_s, hmdist's seconds.estimate), after the BVH and the primary
 # hits, which each pays once. Each image's f_diff, signed bias, f_diff over the creases (the
 # tenth of the pixels with the smallest reference H) and over the rest, and p95 of |ΔH|/H
@@ -165,6 +167,12 @@ print(round(d.get("mean_rays_per_pixel") or d["rays"]), d["seconds"]["estimate"]
             for a in 0.004 0.002 0.001 0.0005 0.00025; do
                 hmdist_point hmdist_adaptive "" --method adaptive --tolerance 0 --abs-tolerance "$a" \
                     --loosen 1 --min-rays 64 --max-rays 8192
+            done
+            # Rays where the relative error is (the creases, which p95 counts), the filter
+            # where the neighbours share them (the open surfaces, which f_diff counts).
+            for t in 0.2 0.14 0.1 0.08 0.06 0.04 0.03 0.02; do
+                hmdist_point hmdist_adaptive_denoise "" --method adaptive --tolerance "$t" --loosen 0.5 \
+                    --min-rays 64 --max-rays 8192 --denoise
             done
         done
         "$venv/bin/python" "$here/denoise_pictures.py" "$reference" "$work/embree-256.exr" "$work/denoise-64.exr" \

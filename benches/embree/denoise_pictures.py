@@ -12,7 +12,7 @@ import sys
 
 import numpy as np
 import OpenEXR
-from PIL import Image, ImageDraw
+from PIL import Image, ImageDraw, ImageFont
 
 
 def read(path):
@@ -39,14 +39,15 @@ def main():
         (grey(1 - 10 * scale * np.abs(ours - ref)), "|ΔH|, hmdist 64 + --denoise"),
     ]
     h, w = ref.shape
-    label = 22
+    label = 24
     sheet = Image.new("RGB", (3 * w, 2 * (h + label)), "white")
     draw = ImageDraw.Draw(sheet)
+    font = ImageFont.load_default(size=15)
     for i, (tile, text) in enumerate(tiles):
         x, y = (i % 3) * w, (i // 3) * (h + label)
         if tile is not None:
             sheet.paste(tile, (x, y + label))
-        draw.text((x + 4, y + 5), text, fill="black")
+        draw.text((x + 4, y + 4), text, fill="black", font=font)
     sheet.save(out)
 
 
