@@ -34,9 +34,9 @@ def main():
         (grey(scale * ref), "reference (8,192 rays)"),
         (grey(scale * embree), "Embree, 256 rays"),
         (grey(scale * ours), "hmdist, 64 rays + --denoise"),
-        (None, ""),
-        (grey(1 - 10 * scale * np.abs(embree - ref)), "|ΔH|, Embree 256"),
-        (grey(1 - 10 * scale * np.abs(ours - ref)), "|ΔH|, hmdist 64 + --denoise"),
+        (None, f"right: 1 - clamp(10 s |H - H_ref|),\ns = {scale:g}, white: no difference"),
+        (grey(1 - 10 * scale * np.abs(embree - ref)), "|H - H_ref|, Embree 256"),
+        (grey(1 - 10 * scale * np.abs(ours - ref)), "|H - H_ref|, hmdist 64 + --denoise"),
     ]
     h, w = ref.shape
     label = 24
@@ -47,7 +47,9 @@ def main():
         x, y = (i % 3) * w, (i // 3) * (h + label)
         if tile is not None:
             sheet.paste(tile, (x, y + label))
-        draw.text((x + 4, y + 4), text, fill="black", font=font)
+            draw.text((x + 4, y + 4), text, fill="black", font=font)
+        else:
+            draw.multiline_text((x + 4, y + label + 8), text, fill="black", font=font, spacing=6)
     sheet.save(out)
 
 
