@@ -9,11 +9,12 @@ fn main() -> ExitCode {
     let args = cli::parse();
     let runtime_dir = quiet_headless_vulkan();
     let signals = cli::signals::Signals::catch();
+    let kept = cli::kept_when_interrupted(&args);
     let code = match cli::run(args) {
         Ok(code) => code,
         Err(hmdist::error::Error::Interrupted) => {
             let (status, name) = signals.interrupted_by();
-            eprintln!("hmdist: interrupted by {name}: no output was written");
+            eprintln!("hmdist: interrupted by {name}: {kept}");
             ExitCode::from(status)
         }
         Err(err) => {

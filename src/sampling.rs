@@ -297,6 +297,21 @@ pub fn in_stratum_lanes(strata: &[[u32; 8]; 2], (a, b): (u32, u32), xi: &[[f32; 
     u
 }
 
+/// `v` made unit length, or `None` where it is zero or not finite. Where its squared length
+/// would overflow or underflow f32 (components beyond about 1e19 or below 1e-19) it is
+/// scaled by its largest component first; otherwise this is `v.normalize()`, bit for bit.
+pub fn unit(v: Vec3) -> Option<Vec3> {
+    if !v.is_finite() {
+        return None;
+    }
+    let length_squared = v.length_squared();
+    if (1e-30..=1e30).contains(&length_squared) {
+        return Some(v.normalize());
+    }
+    let largest = v.abs().max_element();
+    (largest > 0.0).then(|| (v / largest).normalize())
+}
+
 /// A unit direction in the local frame (z = normal) from a point of the unit square.
 /// Cosine: `θ = asin √u, φ = 2πv`. Uniform: `cos θ = 1 − u, φ = 2πv`.
 #[inline(always)]
@@ -397,6 +412,19 @@ impl Frame {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn unit_vectors_neither_overflow_nor_underflow() {
+        assert_eq!(unit(Vec3::new(0.0, -3e19, 0.0)), Some(Vec3::NEG_Y));
+        assert_eq!(unit(Vec3::new(1e30, 0.0, 1e30)), Some(Vec3::new(1.0, 0.0, 1.0).normalize()));
+        assert_eq!(unit(Vec3::new(1e-15, 0.0, 0.0)), Some(Vec3::X));
+        assert_eq!(unit(Vec3::new(0.0, 1e-40, 0.0)), Some(Vec3::Y));
+        let v = Vec3::new(0.3, -1.0, 0.2);
+        assert_eq!(unit(v), Some(v.normalize()), "an ordinary vector: normalize's bits");
+        for bad in [Vec3::ZERO, Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::new(f32::NAN, 1.0, 0.0)] {
+            assert_eq!(unit(bad), None, "{bad}");
+        }
+    }
 
     #[test]
     fn strata_are_the_most_nearly_square_factorisation() {

@@ -449,3 +449,26 @@ fn a_gpu_loop_cut_short_is_an_error_not_an_image() {
         }
     }
 }
+
+#[test]
+fn a_gpu_gather_is_denoised_as_the_cpu_filters_its_image() {
+    // The filter runs on the CPU after the GPU's pixels: the GPU image filtered later through
+    // the same guide is the denoised GPU render, bit for bit.
+    let scene = validation::sphere(validation::SPHERE_RADIUS, 5);
+    let test = "a_gpu_gather_is_denoised_as_the_cpu_filters_its_image";
+    let Some(plain) = gpu_render(test, &scene, gpu_gather(16), 24, vec![]) else {
+        return;
+    };
+    let options = RenderOptions {
+        bvh_quality: BuildQuality::Fast,
+        denoise: Some(Default::default()),
+        ..RenderOptions::default()
+    };
+    let denoised = common::render_square(&scene, &gpu_gather(16), 24, options).unwrap();
+    assert_eq!(denoised.report.details.device.as_ref().unwrap().backend, "gpu");
+    let guide = hmdist::render::guide(&scene, (24, 24), BuildQuality::Fast, vec![16.0; 576]).unwrap();
+    let later = hmdist::denoise::filter(&plain.image.data, &guide, &Default::default());
+    let bits = |v: &[f32]| v.iter().map(|h| h.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&later), bits(&denoised.image.data));
+    assert_ne!(bits(&later), bits(&plain.image.data));
+}

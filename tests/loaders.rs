@@ -408,6 +408,24 @@ fn bad_toml_files_name_the_file_and_line() {
     let blind = format!("{mesh}{}", camera.replace("[0, 0, 5]", "[0, 0, 0]"));
     assert_fails(&dir, blind, "blind.toml:3: the camera's eye and target are");
     assert_fails(&dir, "# nothing\n", "empty.toml: the scene names no meshes");
+    // Exactly three numbers: a fourth is not ignored, two are not enough.
+    let four = format!("{mesh}{}", light.replace("[0, 1, 0]", "[0, 9.8, 0, 123]"));
+    assert_fails(&dir, four, "four.toml:4: expected exactly three numbers [x, y, z], found 4");
+    let eye = format!("{mesh}{}", camera.replace("[0, 0, 5]", "[0, 5]"));
+    assert_fails(&dir, eye, "eye.toml:4: expected exactly three numbers [x, y, z], found 2");
+}
+
+#[test]
+fn a_light_direction_of_any_finite_length_is_the_unit_direction() {
+    // 3e19 squared overflows f32: normalised naively it became [0, -0, 0] (E = 0 everywhere).
+    let dir = Scratch::new("toml-light-length");
+    dir.write("t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    for (name, direction) in [("huge", "[0, -3e19, 0]"), ("tiny", "[0, -1e-25, 0]")] {
+        let light = format!("[light]\nposition = [0, 1, 0]\ndirection = {direction}\ncone_half_angle_deg = 30\n");
+        let path = dir.write(&format!("{name}.toml"), format!("[[mesh]]\npath = \"t.obj\"\n{light}"));
+        let scene = Scene::load(path.to_str().unwrap()).unwrap();
+        assert_eq!(scene.light.unwrap().direction, glam::Vec3::NEG_Y, "{name}");
+    }
 }
 
 #[test]

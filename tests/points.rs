@@ -348,3 +348,34 @@ fn hmdist_points_refuses_bad_input() {
         "--max-distance must be positive",
     );
 }
+
+/// `hmdist points` on the slab with the CSV `text`: H per row, as written.
+fn points_of_csv(case: &str, text: &str) -> Vec<String> {
+    let dir = Scratch::new(case);
+    dir.write("in.csv", text.as_bytes());
+    hmdist_ok(dir.path(), &["points", "--quiet", "--scene", "slab", "--rays", "16", "in.csv", "h.csv"]);
+    std::fs::read_to_string(dir.join("h.csv")).unwrap().lines().map(String::from).collect()
+}
+
+#[test]
+fn a_csv_header_is_recognised_by_what_it_is_not_by_failing_to_parse() {
+    let rows = "0,0.5,0,0,1,0\n1,0.5,0,0,1,0\n2,0.5,0,0,1,0\n";
+    let plain = points_of_csv("csv-plain", rows);
+    assert_eq!(plain.len(), 3);
+    // A byte-order mark, a header, a trailing comment: the same three rows.
+    assert_eq!(points_of_csv("csv-bom", &format!("\u{feff}{rows}")), plain);
+    assert_eq!(points_of_csv("csv-bom-header", &format!("\u{feff}x,y,z,nx,ny,nz\n{rows}")), plain);
+    let commented = rows.replacen("0,0.5,0,0,1,0\n", "0,0.5,0,0,1,0  # the first\n", 1);
+    assert_eq!(points_of_csv("csv-comment", &commented), plain);
+    // A typo in the first row is a bad row, not a header.
+    let typo = rows.replacen("0,0.5,0,", "0,0.5,x0,", 1);
+    refuses("csv-typo", &[("in.csv", typo.as_bytes())], &["points", "--scene", "slab", "in.csv", "h.csv"], "in.csv:1: expected 6 numbers");
+}
+
+#[test]
+fn a_normal_of_any_finite_length_is_the_unit_normal() {
+    // 1e30 squared overflows f32; 1e-15 squared is 1e-30: both are the unit normal +y.
+    let unit = points_of_csv("normal-unit", "0,0.5,0,0,1,0\n");
+    assert_eq!(points_of_csv("normal-huge", "0,0.5,0,0,1e30,0\n"), unit);
+    assert_eq!(points_of_csv("normal-tiny", "0,0.5,0,0,1e-15,0\n"), unit);
+}

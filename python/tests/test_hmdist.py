@@ -114,6 +114,26 @@ def test_cache_returns_its_records_and_a_tiny_accuracy_gives_the_irradiance_imag
         s.cache(size=(20, 16), spacing="nearest")
 
 
+def test_cache_and_irradiance_refuse_what_the_cli_refuses() -> None:
+    s = hmdist.Scene.builtin("cube")
+    H, _ = s.render(size=(20, 16), rays=16)
+    E, _ = s.irradiance(size=(20, 16), rays=4)
+    bad_h = H.copy()
+    bad_h[0, 3] = -1.0
+    with pytest.raises(ValueError, match=r"holds H = -1 at pixel \(3, 0\)"):
+        s.cache(size=(20, 16), rays=16, spacing="oracle", oracle=bad_h, neighbour_clamp=True)
+    bad_e = E.copy()
+    bad_e[1, 2] = np.inf
+    with pytest.raises(ValueError, match=r"holds E = inf at pixel \(2, 1\)"):
+        s.cache(size=(20, 16), rays=16, reference=bad_e)
+    with pytest.raises(ValueError, match="names rays twice"):
+        s.cache(size=(20, 16), rays=16, spacing="hmd:gather:rays=8,rays=4")
+    with pytest.raises(ValueError, match="built-in 'slab' has none"):
+        hmdist.Scene.builtin("slab").irradiance(size=(4, 4), rays=4)
+    with pytest.raises(ValueError, match="cannot filter irradiance"):
+        s.irradiance(size=(4, 4), rays=4, denoise=True)
+
+
 def test_hmd_at_on_an_images_own_hits_keyed_by_pixel_equals_the_image() -> None:
     s = hmdist.Scene.builtin("cube")
     cam = hmdist.Camera((0.3, 4.3, 4.7), (0.0, 1.6, -1.6), fov_y_deg=60, size=(32, 24))

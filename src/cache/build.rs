@@ -152,6 +152,27 @@ fn check<'a>(
     })
 }
 
+/// Refuses an oracle image of H that is not one: a value that is not positive (H is a
+/// distance: `+inf` where every ray escapes, NaN only where the camera sees nothing), or NaN
+/// at a pixel where the cache has a surface, naming the first such pixel.
+fn check_oracle(oracle: &HmdImage, gbuffer: &crate::estimators::GBuffer) -> Result<()> {
+    let width = oracle.width as usize;
+    let bad = oracle.data.iter().zip(&gbuffer.points).position(|(&h, point)| {
+        (h.is_nan() && point.is_some()) || h <= 0.0
+    });
+    match bad {
+        None => Ok(()),
+        Some(i) => {
+            let (x, y, h) = (i % width, i / width, oracle.data[i]);
+            let message = format!(
+                "holds H = {h} at pixel ({x}, {y}), where the cache sees a surface: an H is a positive distance \
+                 (+inf where every ray escapes, NaN only where the camera sees nothing)"
+            );
+            Err(Error::invalid("oracle", message))
+        }
+    }
+}
+
 /// The cache, on the current pool: the BVH and primary hits, the spacing estimator's
 /// preparation, the records level by level, every pixel's E.
 fn build(
@@ -167,6 +188,9 @@ fn build(
     let (accel, bvh) = Accel::for_work(&scene.mesh, options.bvh_quality, rays, options.kernel)?;
     let gbuffer = primary_hits(&accel, scene, w, h);
     crate::interrupt::check()?;
+    if let Some(oracle) = checked.oracle {
+        check_oracle(oracle, &gbuffer)?;
+    }
     let l_diag = scene.bounds().diagonal();
     let context = EstimateContext {
         accel: &accel,
@@ -183,7 +207,11 @@ fn build(
     };
     let prepare_start = Instant::now();
     let prepared = match &checked.spacing {
-        Some(estimator) => Some(estimator.prepare(&context, &gbuffer, progress)?),
+        Some(estimator) => Some(
+            estimator
+                .prepare(&context, &gbuffer, progress)
+                .map_err(|e| params.spacing.blame(e))?,
+        ),
         None => None,
     };
     seconds.spacing_prepare = prepare_start.elapsed().as_secs_f64();

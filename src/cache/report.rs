@@ -141,13 +141,29 @@ pub fn relative_errors(
         );
         return Err(Error::invalid("reference", message));
     }
+    // An irradiance is a finite non-negative number wherever the cache has a surface.
+    let bad = image.data.iter().zip(&reference.data).position(|(&e, &r)| {
+        r < 0.0 || r.is_infinite() || (r.is_nan() && e.is_finite())
+    });
+    if let Some(i) = bad {
+        let (x, y) = (i % w as usize, i / w as usize);
+        let message = format!(
+            "{path} holds E = {} at pixel ({x}, {y}), where the cache sees a surface: an irradiance is a \
+             finite number, at least 0 (NaN only where the camera sees nothing)",
+            reference.data[i]
+        );
+        return Err(Error::invalid("reference", message));
+    }
     let finite: Vec<f64> = reference
         .data
         .iter()
         .filter(|v| v.is_finite())
         .map(|&v| v as f64)
         .collect();
-    let floor = 0.01 * finite.iter().sum::<f64>() / finite.len().max(1) as f64;
+    // 1 % of the mean E: below it an error is relative to the floor (a dark pixel's tiny E
+    // would make any difference huge). A scene whose light reaches nothing the camera sees
+    // has E = 0 everywhere, a valid answer: there the floor is the smallest positive number.
+    let floor = (0.01 * finite.iter().sum::<f64>() / finite.len().max(1) as f64).max(f64::MIN_POSITIVE);
     let errors: Vec<f32> = image
         .data
         .iter()

@@ -55,7 +55,9 @@ impl Spacing {
                 .split_once('=')
                 .ok_or_else(|| bad(format!("'{pair}' in '{text}' is not NAME=VALUE")))?;
             let value = serde_json::from_str(value).unwrap_or_else(|_| Value::String(value.into()));
-            params.insert(name.trim().into(), value);
+            if params.insert(name.trim().into(), value).is_some() {
+                return Err(bad(format!("'{text}' names {} twice", name.trim())));
+            }
         }
         let spacing = Spacing::Estimator {
             method: method.into(),
@@ -70,17 +72,17 @@ impl Spacing {
         let Spacing::Estimator { method, params } = self else {
             return Ok(None);
         };
-        let refuse = |e: Error| {
-            let why = match e {
-                Error::Parameter {
-                    name: Some(name),
-                    message,
-                } => format!("{name} {message}"),
-                Error::Parameter { name: None, message } => message,
-                other => other.to_string(),
-            };
-            Error::invalid("spacing", format!("hmd:{method}: {why}"))
-        };
+        let refuse = |e: Error| self.blame(e);
+        if registry::METHODS.iter().all(|m| m.name != method) {
+            // The methods that estimate H: what hmd: takes (not irradiance).
+            let of_h: Vec<&str> = registry::METHODS
+                .iter()
+                .filter(|m| m.build(&Map::new(), &[]).is_ok_and(|e| e.channel() == HMD_CHANNEL))
+                .map(|m| m.name)
+                .collect();
+            let message = format!("hmd:{method}: '{method}' is not one of {}", of_h.join(", "));
+            return Err(Error::invalid("spacing", message));
+        }
         let estimator = registry::method(method)
             .and_then(|entry| entry.build(params, &[]))
             .map_err(refuse)?;
@@ -89,6 +91,38 @@ impl Spacing {
             return Err(Error::invalid("spacing", message));
         }
         Ok(Some(estimator))
+    }
+
+    /// `error`, from this spacing's estimator, as an error of `--spacing`: a parameter named
+    /// inside it (`hmd:photon2:photon_map=...`) is no flag of the command's own. Other errors
+    /// (a file's, a device's) keep their kind.
+    pub fn blame(&self, error: Error) -> Error {
+        let Spacing::Estimator { method, .. } = self else {
+            return error;
+        };
+        let why = match error {
+            Error::Parameter {
+                name: Some(name),
+                message,
+            } => format!("{name} {message}"),
+            Error::Parameter { name: None, message } => message,
+            other => return other,
+        };
+        Error::invalid("spacing", format!("hmd:{method}: {why}"))
+    }
+
+    /// The files this spacing's parameters name that exist (`hmd:photon2:...,photon_map=p.map`):
+    /// inputs of the cache, which no output may overwrite.
+    pub fn files_read(&self) -> Vec<std::path::PathBuf> {
+        let Spacing::Estimator { params, .. } = self else {
+            return vec![];
+        };
+        params
+            .values()
+            .filter_map(Value::as_str)
+            .map(std::path::PathBuf::from)
+            .filter(|path| path.is_file())
+            .collect()
     }
 
     /// The name `--spacing` takes for it.
@@ -223,10 +257,11 @@ mod tests {
     fn a_bad_source_is_refused_by_name() {
         for (text, says) in [
             ("nearest", "is not one of"),
-            ("hmd:magic", "magic"),
+            ("hmd:magic", "'magic' is not one of gather, adaptive, cubemap, photon1, photon2"),
             ("hmd:irradiance", "does not estimate H"),
             ("hmd:gather:photons=9", "photons"),
             ("hmd:gather:rays", "NAME=VALUE"),
+            ("hmd:gather:rays=64,rays=32", "names rays twice"),
         ] {
             let err = Spacing::parse(text).err().unwrap();
             let message = err.to_string();

@@ -93,8 +93,13 @@ pub fn run(args: CacheArgs) -> Result<()> {
         .unwrap_or_else(|| args.out.with_extension("json"));
     let mut paths: Vec<&Path> = vec![&args.out, &png, &json];
     paths.extend(args.diff_png.as_deref());
+    // No output may be a file the cache reads: the scene's, the images and their sidecars,
+    // a photon map named inside --spacing.
     let mut inputs = Scene::files_read(&args.scene);
-    inputs.extend(args.oracle.iter().chain(&args.reference).cloned());
+    for image in args.oracle.iter().chain(&args.reference) {
+        inputs.extend([image.clone(), image.with_extension("json")]);
+    }
+    inputs.extend(params.spacing.files_read());
     let inputs: Vec<&Path> = inputs.iter().map(|p| p.as_path()).collect();
     let outputs = OutputSet::reserve(&paths, &inputs)?;
     for (path, format) in [(&args.out, "exr"), (&png, "png"), (&json, "json")] {
@@ -113,12 +118,12 @@ pub fn run(args: CacheArgs) -> Result<()> {
     let oracle = args
         .oracle
         .as_deref()
-        .map(|path| image_of(path, exr::CHANNEL, "oracle", &scene, size))
+        .map(|path| image_of(path, exr::CHANNEL, "oracle", &scene, &args))
         .transpose()?;
     let reference = args
         .reference
         .as_deref()
-        .map(|path| image_of(path, exr::IRRADIANCE_CHANNEL, "reference", &scene, size))
+        .map(|path| image_of(path, exr::IRRADIANCE_CHANNEL, "reference", &scene, &args))
         .transpose()?;
     bar.status("BVH");
     let mut cached = cache(&scene, &params, &options, oracle.as_ref(), &bar)?;
@@ -187,15 +192,11 @@ impl CacheArgs {
 }
 
 /// Channel `channel` of the EXR at `path` (`--oracle` or `--reference`, named `flag`), checked
-/// against the cache to come: the same size, and where its JSON sidecar is there, the same
-/// scene (and for a reference of E, an irradiance image).
-fn image_of(
-    path: &Path,
-    channel: &str,
-    flag: &'static str,
-    scene: &Scene,
-    size: (u32, u32),
-) -> Result<HmdImage> {
+/// against the cache to come: the same size, and where its JSON sidecar is there, a render of
+/// the same pixels ([`not_the_same_pixels`]).
+fn image_of(path: &Path, channel: &str, flag: &'static str, scene: &Scene, args: &CacheArgs) -> Result<HmdImage> {
+    let size = args.image.options()?;
+    let size = (size.width, size.height);
     let image = exr::read_channel(path, channel).map_err(|e| {
         let hint = if channel == exr::IRRADIANCE_CHANNEL {
             "make one with hmdist render --method irradiance"
@@ -217,16 +218,68 @@ fn image_of(
     }
     let sidecar = path.with_extension("json");
     if sidecar.is_file() {
-        let report = RenderReport::read(&sidecar)?;
-        if report.scene != scene.name {
+        let report = RenderReport::read(&sidecar).map_err(|e| {
             let message = format!(
-                "{} is an image of scene '{}', the cache's is '{}'",
+                "{}'s sidecar {} is not the report of a render ({}): give the image `hmdist render` wrote{}",
                 path.display(),
-                report.scene,
-                scene.name
+                sidecar.display(),
+                e.describe(|n| n.into()),
+                if flag == "reference" { " with --method irradiance" } else { "" }
+            );
+            Error::invalid(flag, message)
+        })?;
+        let differences = not_the_same_pixels(&report, scene, args, flag == "reference");
+        if !differences.is_empty() {
+            let message = format!(
+                "{} is not an image of the pixels this cache makes: {}",
+                path.display(),
+                differences.join("; ")
             );
             return Err(Error::invalid(flag, message));
         }
     }
     Ok(image)
+}
+
+/// What differs between the render `report` describes and the cache `args` makes of `scene`,
+/// each as `what (the image's against the cache's)`: a shard's part, the scene (its name,
+/// triangles, bounds), the camera, the distance clamp; for a reference of E (`of_e`) also its
+/// method, the light and the absorption. The rays, seed and sampler do not count: they change
+/// an estimate's noise, not what it estimates.
+fn not_the_same_pixels(report: &RenderReport, scene: &Scene, args: &CacheArgs, of_e: bool) -> Vec<String> {
+    use hmdist::report::{BoundsReport, CameraReport, LightReport};
+    let json = |v: &dyn erased::Json| v.json();
+    let mut differences = vec![];
+    let mut differ = |what: &str, theirs: String, ours: String| {
+        if theirs != ours {
+            differences.push(format!("{what} ({theirs} against {ours})"));
+        }
+    };
+    if let Some(shard) = &report.shard {
+        differ("a shard's part", format!("{}/{}", shard.index, shard.count), "a whole image".into());
+    }
+    differ("scene", report.scene.clone(), scene.name.clone());
+    differ("triangles", report.triangles.to_string(), scene.mesh.triangle_count().to_string());
+    differ("bounds", json(&report.bounds), json(&BoundsReport::from(&scene.bounds())));
+    differ("camera", json(&report.camera), json(&CameraReport::from(&scene.camera)));
+    differ("max_distance", format!("{:?}", report.max_distance), format!("{:?}", args.max_distance));
+    if of_e {
+        differ("method", report.method.clone(), "irradiance".into());
+        differ("light", json(&report.light), json(&scene.light.as_ref().map(LightReport::from)));
+        let absorption = report.parameters.number("absorption").map(|a| a as f32);
+        differ("absorption", format!("{absorption:?}"), format!("{:?}", Some(args.irradiance.absorption)));
+    }
+    differences
+}
+
+/// Values as JSON text, to compare report parts that have no `PartialEq`.
+mod erased {
+    pub trait Json {
+        fn json(&self) -> String;
+    }
+    impl<T: serde::Serialize> Json for T {
+        fn json(&self) -> String {
+            serde_json::to_string(self).expect("a report part serialises")
+        }
+    }
 }

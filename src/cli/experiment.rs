@@ -76,6 +76,17 @@ fn experiment_names() -> clap::builder::PossibleValuesParser {
     clap::builder::PossibleValuesParser::new(std::iter::once(all).chain(each))
 }
 
+impl ExperimentArgs {
+    /// What an interrupted run of it keeps: the images it finished, in OUT/cache.
+    pub fn kept_when_interrupted(&self) -> String {
+        format!(
+            "the images it finished are kept in {} (each whole); the same command goes on from them, \
+             and no table or report was written",
+            self.out.join("cache").display()
+        )
+    }
+}
+
 pub fn run(args: ExperimentArgs) -> Result<()> {
     let preset = args.preset;
     let names = args.names.join(",");

@@ -110,6 +110,15 @@ pub fn run(cli: Cli) -> Result<ExitCode> {
     done.map(|()| ExitCode::SUCCESS)
 }
 
+/// What a run of `cli` keeps if it is interrupted, for the line hmdist ends with: nothing, but
+/// for an experiment, whose finished images stay cached for the same command to go on from.
+pub fn kept_when_interrupted(cli: &Cli) -> String {
+    match &cli.command {
+        Command::Experiment(args) => args.kept_when_interrupted(),
+        _ => "no output was written".into(),
+    }
+}
+
 /// The error as the person who typed the command should read it: library parameter names
 /// (`max_distance`) as the flags that set them (`--max-distance`).
 pub fn describe(error: &Error) -> String {

@@ -128,7 +128,12 @@ impl Irradiance {
         let rho = self.reflectance() as f64;
         let mut tally = Tally::default();
         let mut sum = 0.0f64;
-        for w in self.gather.directions(seed, key) {
+        for (j, w) in self.gather.directions(seed, key).enumerate() {
+            // A point of millions of rays still stops soon after an interruption (its E is
+            // never seen: the pass or the cache ends with Error::Interrupted).
+            if j % INTERRUPT_POLL == INTERRUPT_POLL - 1 && crate::interrupt::requested() {
+                break;
+            }
             let direction = start.frame.to_world(w);
             tally.rays += 1;
             let hit = accel.closest_hit(start.origin, direction, t_max, start.leaving);
@@ -156,6 +161,9 @@ impl Irradiance {
     }
 }
 
+/// Gather rays between two looks at the interruption flag within one point.
+const INTERRUPT_POLL: usize = 4096;
+
 /// A spot light as the direct irradiance reads it, its cone's cosine worked out once (not per
 /// ray).
 #[derive(Clone, Copy, Debug)]
@@ -181,8 +189,9 @@ impl From<SpotLight> for Spot {
 pub(crate) fn light_of(scene: &crate::scene::Scene) -> Result<Spot> {
     scene.light.map(Spot::from).ok_or_else(|| {
         let message = format!(
-            "'{}' has no spot light, and irradiance needs one: add a [light] to its TOML file",
-            scene.name
+            "'{}' has no spot light, and irradiance needs one: {}",
+            scene.name,
+            crate::scene::procedural::light_advice(scene)
         );
         Error::invalid("scene", message)
     })

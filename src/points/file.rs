@@ -183,23 +183,28 @@ fn npy_bytes(path: &Path, _: &[f32]) -> Result<Vec<u8>> {
     Err(without_npy(path))
 }
 
-/// Rows of a CSV file: six numbers per line, separated by commas (or spaces); a first line
-/// that is not numbers (a header), blank lines and `#` comments are skipped.
+/// Rows of a CSV file: six numbers per line, separated by commas (or spaces); a header (the
+/// first line with text, if none of its fields is a number), blank lines, `#` comments (whole
+/// lines or the end of one) and a UTF-8 byte-order mark are skipped. A first line with some
+/// numbers and some text is a bad row, not a header.
 fn parse_csv(path: &Path, bytes: &[u8]) -> Result<Vec<[f32; 6]>> {
     let text = std::str::from_utf8(bytes).map_err(|e| {
         let line = 1 + bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count();
         Error::file_line(path, line, "not UTF-8 text")
     })?;
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut out = vec![];
+    let mut first = true;
     for (i, line) in text.lines().enumerate() {
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') {
+        let line = line.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
             continue;
         }
         let fields: Vec<&str> = line.split([',', ' ', '\t']).filter(|f| !f.is_empty()).collect();
         let numbers: Vec<f32> = fields.iter().filter_map(|f| f.trim().parse().ok()).collect();
-        if numbers.len() != fields.len() && i == 0 {
-            continue; // a header
+        let header = std::mem::take(&mut first) && numbers.is_empty();
+        if header {
+            continue;
         }
         if numbers.len() != 6 || fields.len() != 6 {
             let message = format!("expected 6 numbers (x y z nx ny nz), found '{line}'");

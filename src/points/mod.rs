@@ -46,15 +46,14 @@ impl SurfacePoint {
             let message = format!("must be finite, not {point} with normal {normal}");
             return Err(Error::invalid("points", message));
         }
-        let length_squared = normal.length_squared();
-        if length_squared < 1e-24 {
-            let message = format!("must have a non-zero normal, not {normal} at {point}");
-            return Err(Error::invalid("points", message));
-        }
-        let normal = if (length_squared - 1.0).abs() > 1e-6 {
-            normal / length_squared.sqrt()
-        } else {
+        // A normal already of unit length is kept bit for bit (H at an image's points is the
+        // image's H); any other is scaled first, so that no length overflows or underflows.
+        let normal = if (normal.length_squared() - 1.0).abs() <= 1e-6 {
             normal
+        } else {
+            crate::sampling::unit(normal).ok_or_else(|| {
+                Error::invalid("points", format!("must have a non-zero normal, not {normal} at {point}"))
+            })?
         };
         Ok(SurfacePoint {
             point,

@@ -44,10 +44,11 @@ impl Camera {
             return Err(Error::scene("the camera has a non-finite coordinate"));
         }
         let f = self.target - self.eye;
-        if f.length_squared() == 0.0 {
-            return Err(Error::scene("the camera's eye and target are the same point"));
-        }
-        if f.normalize().cross(self.up).length_squared() < 1e-12 {
+        let (Some(f), Some(up)) = (crate::sampling::unit(f), crate::sampling::unit(self.up)) else {
+            let what = if f == glam::Vec3::ZERO { "eye and target are the same point" } else { "up vector is zero" };
+            return Err(Error::scene(format!("the camera's {what}")));
+        };
+        if f.cross(up).length_squared() < 1e-12 {
             return Err(Error::scene(
                 "the camera's up vector is parallel to its view direction",
             ));

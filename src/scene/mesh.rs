@@ -160,6 +160,17 @@ impl Mesh {
                 p.x, p.y, p.z
             )));
         }
+        let diagonal = self.bounds().diagonal();
+        if diagonal < MIN_DIAGONAL {
+            return Err(Error::scene(format!(
+                "the scene is {diagonal:e} across: too small for float32 geometry, whose ray offsets and \
+                 d_min (1e-6 of the diagonal) need it at least {MIN_DIAGONAL:e} across (scale the model up)"
+            )));
+        }
         Ok(())
     }
 }
+
+/// The smallest bounding-box diagonal a scene may have: below it a squared distance (and
+/// `d_min`'s square) leaves float32's normal range.
+pub const MIN_DIAGONAL: f32 = 1e-15;

@@ -167,9 +167,9 @@ impl PhotonEstimator {
         match self.params.source {
             SourceKind::Light => scene.light.map(PhotonSource::Light).ok_or_else(|| {
                 let message = format!(
-                    "light needs a spot light, and scene '{}' has no spot light: add a [light] \
-                     to its TOML file or take the camera as the source",
-                    scene.name
+                    "light needs a spot light, and scene '{}' has no spot light: {}, or take the camera as the source",
+                    scene.name,
+                    crate::scene::procedural::light_advice(scene)
                 );
                 Error::invalid("source", message)
             }),

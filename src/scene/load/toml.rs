@@ -50,14 +50,18 @@ struct MeshEntry {
     path: String,
     scale: Option<f32>,
     rotate_y_deg: Option<f32>,
+    #[serde(default, deserialize_with = "maybe_three")]
     translate: Option<[f32; 3]>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct CameraEntry {
+    #[serde(deserialize_with = "three")]
     eye: [f32; 3],
+    #[serde(deserialize_with = "three")]
     target: [f32; 3],
+    #[serde(default, deserialize_with = "maybe_three")]
     up: Option<[f32; 3]>,
     fov_y_deg: f32,
 }
@@ -65,9 +69,26 @@ struct CameraEntry {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct LightEntry {
+    #[serde(deserialize_with = "three")]
     position: [f32; 3],
+    #[serde(deserialize_with = "three")]
     direction: [f32; 3],
     cone_half_angle_deg: f32,
+}
+
+/// A vector of exactly three numbers (serde's `[f32; 3]` takes the first three of four).
+fn three<'de, D: serde::Deserializer<'de>>(deserializer: D) -> std::result::Result<[f32; 3], D::Error> {
+    let numbers = Vec::<f32>::deserialize(deserializer)?;
+    <[f32; 3]>::try_from(numbers.as_slice()).map_err(|_| {
+        serde::de::Error::custom(format!("expected exactly three numbers [x, y, z], found {}", numbers.len()))
+    })
+}
+
+/// [`three`], where the vector may be left out.
+fn maybe_three<'de, D: serde::Deserializer<'de>>(deserializer: D) -> std::result::Result<Option<[f32; 3]>, D::Error> {
+    #[derive(Deserialize)]
+    struct Three(#[serde(deserialize_with = "three")] [f32; 3]);
+    Ok(Option::<Three>::deserialize(deserializer)?.map(|t| t.0))
 }
 
 #[derive(Deserialize)]
@@ -193,9 +214,9 @@ fn spot_light(entry: &LightEntry) -> std::result::Result<SpotLight, String> {
     if !position.is_finite() || !direction.is_finite() {
         return Err("the light's position and direction must be finite numbers".to_string());
     }
-    if direction.length_squared() == 0.0 {
+    let Some(direction) = crate::sampling::unit(direction) else {
         return Err("the light's direction must not be zero".to_string());
-    }
+    };
     if !(angle > 0.0 && angle <= 180.0) {
         return Err(format!(
             "the light's cone half-angle must be between 0 and 180 degrees, not {angle}"
@@ -203,7 +224,7 @@ fn spot_light(entry: &LightEntry) -> std::result::Result<SpotLight, String> {
     }
     Ok(SpotLight {
         position,
-        direction: direction.normalize(),
+        direction,
         cone_half_angle_deg: angle,
     })
 }
