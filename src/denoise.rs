@@ -99,7 +99,10 @@ impl DenoiseParams {
         }
         for (name, value) in [("denoise_radius", self.radius), ("denoise_edge", self.edge)] {
             if !(value.is_finite() && value > 0.0) {
-                return Err(Error::invalid(name, format!("must be a positive number, not {value}")));
+                return Err(Error::invalid(
+                    name,
+                    format!("must be a positive number, not {value}"),
+                ));
             }
         }
         Ok(())
@@ -130,7 +133,13 @@ pub struct Guide {
 
 /// The EXR channels a shard's part carries its [`Guide`] in, in [`Guide::channels`]' order.
 pub const GUIDE_CHANNELS: [&str; 7] = [
-    "guide.x", "guide.y", "guide.z", "guide.nx", "guide.ny", "guide.nz", "guide.rays",
+    "guide.x",
+    "guide.y",
+    "guide.z",
+    "guide.nx",
+    "guide.ny",
+    "guide.nz",
+    "guide.rays",
 ];
 
 impl Guide {
@@ -191,7 +200,7 @@ pub fn filter(hmd: &[f32], guide: &Guide, params: &DenoiseParams) -> Vec<f32> {
         .zip(guide.normals.iter().zip(&guide.samples))
         .map(|((&h, &point), (&normal, &n))| {
             let s = 1.0 / h;
-            let valid = !h.is_nan() && h >= 0.0 && point.is_finite() && normal.is_finite() && n >= 1.0;
+            let valid = h > 0.0 && point.is_finite() && normal.is_finite() && n >= 1.0;
             Pixel {
                 point,
                 normal,
@@ -222,7 +231,13 @@ pub fn filter(hmd: &[f32], guide: &Guide, params: &DenoiseParams) -> Vec<f32> {
 
 /// Pixel `(x, y)` after one pass with taps `step` pixels apart.
 #[inline]
-fn filtered(pixels: &[Pixel], (width, height): (u32, u32), (x, y): (usize, usize), step: usize, params: &DenoiseParams) -> Pixel {
+fn filtered(
+    pixels: &[Pixel],
+    (width, height): (u32, u32),
+    (x, y): (usize, usize),
+    step: usize,
+    params: &DenoiseParams,
+) -> Pixel {
     let width = width as usize;
     let centre = pixels[y * width + x];
     if !centre.valid {
@@ -233,7 +248,10 @@ fn filtered(pixels: &[Pixel], (width, height): (u32, u32), (x, y): (usize, usize
     let inv_edge2 = 0.5 / (params.edge * params.edge);
     let (mut sum_w, mut sum_s, mut sum_v) = (0.0f32, 0.0f32, 0.0f32);
     for (dy, ty) in TAPS.iter().enumerate() {
-        let Some(row) = (y + dy * step).checked_sub(2 * step).filter(|&r| r < height as usize) else {
+        let Some(row) = (y + dy * step)
+            .checked_sub(2 * step)
+            .filter(|&r| r < height as usize)
+        else {
             continue;
         };
         for (dx, tx) in TAPS.iter().enumerate() {
@@ -327,14 +345,39 @@ mod tests {
     #[test]
     fn bad_parameters_are_named() {
         let bad = [
-            DenoiseParams { passes: 0, ..Default::default() },
-            DenoiseParams { passes: MAX_PASSES + 1, ..Default::default() },
-            DenoiseParams { radius: 0.0, ..Default::default() },
-            DenoiseParams { radius: f32::NAN, ..Default::default() },
-            DenoiseParams { edge: -1.0, ..Default::default() },
-            DenoiseParams { edge: f32::INFINITY, ..Default::default() },
+            DenoiseParams {
+                passes: 0,
+                ..Default::default()
+            },
+            DenoiseParams {
+                passes: MAX_PASSES + 1,
+                ..Default::default()
+            },
+            DenoiseParams {
+                radius: 0.0,
+                ..Default::default()
+            },
+            DenoiseParams {
+                radius: f32::NAN,
+                ..Default::default()
+            },
+            DenoiseParams {
+                edge: -1.0,
+                ..Default::default()
+            },
+            DenoiseParams {
+                edge: f32::INFINITY,
+                ..Default::default()
+            },
         ];
-        let names = ["denoise_passes", "denoise_passes", "denoise_radius", "denoise_radius", "denoise_edge", "denoise_edge"];
+        let names = [
+            "denoise_passes",
+            "denoise_passes",
+            "denoise_radius",
+            "denoise_radius",
+            "denoise_edge",
+            "denoise_edge",
+        ];
         for (params, name) in bad.iter().zip(names) {
             let message = params.validate().unwrap_err().to_string();
             assert!(message.contains(name), "{message}");

@@ -105,7 +105,8 @@ pub fn compare(reference: &HmdImage, test: &HmdImage, l_diag: f32) -> Result<Com
     let percent = 100.0 / l_diag as f64;
     let signed: f64 = pairs.iter().map(|&(r, t)| t as f64 - r as f64).sum();
     let (creases, rest) = split_creases(pairs.clone());
-    let absolute = |p: &[(f32, f32)]| mean(p.iter().map(|&(r, t)| (t as f64 - r as f64).abs()).sum(), p.len()) * percent;
+    let absolute =
+        |p: &[(f32, f32)]| mean(p.iter().map(|&(r, t)| (t as f64 - r as f64).abs()).sum(), p.len()) * percent;
     let mut relatives: Vec<f64> = pairs
         .iter()
         .filter(|(r, _)| *r != 0.0)
@@ -193,7 +194,11 @@ mod tests {
         // Twenty pixels: H_ref = 1 … 20; the test image is 0.5 low on the two smallest (the
         // creases) and 1 high on the rest.
         let reference = image((1..=20).map(|i| i as f32).collect());
-        let test = image((1..=20).map(|i| i as f32 + if i <= 2 { -0.5 } else { 1.0 }).collect());
+        let test = image(
+            (1..=20)
+                .map(|i| i as f32 + if i <= 2 { -0.5 } else { 1.0 })
+                .collect(),
+        );
         let c = compare(&reference, &test, 100.0).unwrap();
         assert!((c.f_diff_creases - 0.5).abs() < 1e-12, "{c:?}");
         assert!((c.f_diff_rest - 1.0).abs() < 1e-12, "{c:?}");
@@ -201,7 +206,12 @@ mod tests {
         // Relative errors: 0.5, 0.25, then 1/3, 1/4 … 1/20; the 19th of 20 (nearest rank) is
         // the second largest, 1/3.
         assert!((c.p95_relative_error - 1.0 / 3.0).abs() < 1e-12, "{c:?}");
-        let low = compare(&reference, &image((1..=20).map(|i| i as f32 - 1.0).collect()), 100.0).unwrap();
+        let low = compare(
+            &reference,
+            &image((1..=20).map(|i| i as f32 - 1.0).collect()),
+            100.0,
+        )
+        .unwrap();
         assert!((low.bias + 1.0).abs() < 1e-12, "{low:?}");
     }
 

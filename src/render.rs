@@ -13,11 +13,13 @@ use rayon::prelude::*;
 
 use crate::accel::Hit;
 use crate::accel::{Accel, BuildQuality, RayCaster};
+use crate::denoise::{Guide, GUIDE_CHANNELS};
 use crate::error::{Error, Result};
 pub use crate::estimators::pass::estimate;
-use crate::estimators::{Aov, AovImage, AovSample, DistanceClamp, Estimate, EstimateContext, Estimator, GBuffer};
-use crate::denoise::{Guide, GUIDE_CHANNELS};
 use crate::estimators::Samples;
+use crate::estimators::{
+    Aov, AovImage, AovSample, DistanceClamp, Estimate, EstimateContext, Estimator, GBuffer,
+};
 use crate::image::HmdImage;
 use crate::options::in_pool;
 pub use crate::options::{RenderOptions, DEFAULT_SEED, DEFAULT_SIZE, MAX_PIXELS};
@@ -57,7 +59,11 @@ impl Rendered {
     }
 
     /// The channels a shard's rows hash covers: H, the AOVs, and the guide where there is one.
-    pub fn hashed_channels<'a>(image: &'a HmdImage, aovs: &'a [AovImage], guide: &'a [Vec<f32>]) -> Vec<&'a [f32]> {
+    pub fn hashed_channels<'a>(
+        image: &'a HmdImage,
+        aovs: &'a [AovImage],
+        guide: &'a [Vec<f32>],
+    ) -> Vec<&'a [f32]> {
         std::iter::once(&image.data[..])
             .chain(aovs.iter().map(|a| &a.data[..]))
             .chain(guide.iter().map(|c| &c[..]))
@@ -204,7 +210,9 @@ fn render_in_pool(
         .zip(estimates)
         .map(|(estimator, (estimate, seconds))| {
             let (estimate, denoised) = denoise(*estimator, estimate, &gbuffer, options)?;
-            Ok(output(scene, options, &setup, *estimator, estimate, seconds, denoised))
+            Ok(output(
+                scene, options, &setup, *estimator, estimate, seconds, denoised,
+            ))
         })
         .collect()
 }
@@ -224,7 +232,13 @@ fn denoise(
     options: &RenderOptions,
 ) -> Result<(Estimate, Denoised)> {
     let Some(params) = options.denoise else {
-        return Ok((estimate, Denoised { report: None, guide: None }));
+        return Ok((
+            estimate,
+            Denoised {
+                report: None,
+                guide: None,
+            },
+        ));
     };
     let start = Instant::now();
     let samples = match estimator.samples() {
@@ -251,14 +265,25 @@ fn denoise(
         seconds: start.elapsed().as_secs_f64(),
     };
     let guide = (!filtered).then_some(guide);
-    Ok((estimate, Denoised { report: Some(report), guide }))
+    Ok((
+        estimate,
+        Denoised {
+            report: Some(report),
+            guide,
+        },
+    ))
 }
 
 /// The denoiser's guide of an image of `scene` rendered earlier at `width × height` through
 /// a BVH of preset `bvh` (the one its report names: at exact ties another preset's primary
 /// hits can differ), with `samples` rays per pixel: with it, [`crate::denoise::filter`] filters
 /// that image bit for bit as `render` with [`RenderOptions::denoise`] would have.
-pub fn guide(scene: &Scene, (width, height): (u32, u32), bvh: BuildQuality, samples: Vec<f32>) -> Result<Guide> {
+pub fn guide(
+    scene: &Scene,
+    (width, height): (u32, u32),
+    bvh: BuildQuality,
+    samples: Vec<f32>,
+) -> Result<Guide> {
     RenderOptions {
         width,
         height,
@@ -266,7 +291,10 @@ pub fn guide(scene: &Scene, (width, height): (u32, u32), bvh: BuildQuality, samp
     }
     .validate()?;
     if samples.len() != width as usize * height as usize {
-        return Err(Error::parameter(format!("{} ray counts for {width}x{height} pixels", samples.len())));
+        return Err(Error::parameter(format!(
+            "{} ray counts for {width}x{height} pixels",
+            samples.len()
+        )));
     }
     scene.validate()?;
     let (accel, _) = Accel::for_work(&scene.mesh, bvh, 0, crate::accel::Kernel::best())?;
@@ -280,8 +308,16 @@ fn guide_of(gbuffer: &GBuffer, samples: Vec<f32>) -> Guide {
     Guide {
         width: gbuffer.width,
         height: gbuffer.height,
-        points: gbuffer.points.iter().map(|p| p.as_ref().map_or(none, |h| h.point)).collect(),
-        normals: gbuffer.points.iter().map(|p| p.as_ref().map_or(none, |h| h.normal)).collect(),
+        points: gbuffer
+            .points
+            .iter()
+            .map(|p| p.as_ref().map_or(none, |h| h.point))
+            .collect(),
+        normals: gbuffer
+            .points
+            .iter()
+            .map(|p| p.as_ref().map_or(none, |h| h.normal))
+            .collect(),
         samples,
     }
 }

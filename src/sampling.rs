@@ -416,12 +416,23 @@ mod tests {
     #[test]
     fn unit_vectors_neither_overflow_nor_underflow() {
         assert_eq!(unit(Vec3::new(0.0, -3e19, 0.0)), Some(Vec3::NEG_Y));
-        assert_eq!(unit(Vec3::new(1e30, 0.0, 1e30)), Some(Vec3::new(1.0, 0.0, 1.0).normalize()));
+        assert_eq!(
+            unit(Vec3::new(1e30, 0.0, 1e30)),
+            Some(Vec3::new(1.0, 0.0, 1.0).normalize())
+        );
         assert_eq!(unit(Vec3::new(1e-15, 0.0, 0.0)), Some(Vec3::X));
         assert_eq!(unit(Vec3::new(0.0, 1e-40, 0.0)), Some(Vec3::Y));
         let v = Vec3::new(0.3, -1.0, 0.2);
-        assert_eq!(unit(v), Some(v.normalize()), "an ordinary vector: normalize's bits");
-        for bad in [Vec3::ZERO, Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::new(f32::NAN, 1.0, 0.0)] {
+        assert_eq!(
+            unit(v),
+            Some(v.normalize()),
+            "an ordinary vector: normalize's bits"
+        );
+        for bad in [
+            Vec3::ZERO,
+            Vec3::new(f32::INFINITY, 0.0, 0.0),
+            Vec3::new(f32::NAN, 1.0, 0.0),
+        ] {
             assert_eq!(unit(bad), None, "{bad}");
         }
     }

@@ -11,8 +11,8 @@
 //! shard, and writes the merged report's sums of rays, escapes and seconds with each shard's
 //! timings.
 
-use crate::error::{Error, Result};
 use crate::denoise::Guide;
+use crate::error::{Error, Result};
 use crate::estimators::AovImage;
 use crate::image::HmdImage;
 pub use crate::options::Shard;
@@ -45,7 +45,8 @@ pub fn merge(parts: Vec<Part>) -> Result<Rendered> {
     let (mut image, aovs, guide) = join_rows(&parts)?;
     let mut report = merged_report(&parts, count, image.width, image.height)?;
     if let Some(denoise) = report.denoise.as_mut().filter(|d| !d.filtered) {
-        let guide = guide.ok_or_else(|| Error::parameter("the parts of a denoised render lack their guide channels"))?;
+        let guide = guide
+            .ok_or_else(|| Error::parameter("the parts of a denoised render lack their guide channels"))?;
         let start = std::time::Instant::now();
         image.data = crate::denoise::filter(&image.data, &guide, &denoise.params);
         denoise.filtered = true;

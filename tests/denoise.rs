@@ -25,7 +25,13 @@ fn gather(rays: u32) -> Gather {
     .unwrap()
 }
 
-fn rendered(scene: &Scene, estimator: &dyn Estimator, size: u32, denoise: bool, threads: Option<usize>) -> Rendered {
+fn rendered(
+    scene: &Scene,
+    estimator: &dyn Estimator,
+    size: u32,
+    denoise: bool,
+    threads: Option<usize>,
+) -> Rendered {
     let options = RenderOptions {
         denoise: denoise.then(DenoiseParams::default),
         threads,
@@ -67,19 +73,43 @@ fn inside_a_closed_sphere_the_filtered_image_is_the_radius_with_less_noise() {
     // filter damps the rare near-horizon hits that make 1/d heavy-tailed here (a pixel far
     // above its neighbours is averaged down, its neighbours keep it out), so its mean of R/H
     // falls by about 1 % at 32 rays: within 2 % of both.
-    assert!((plain_mean - 1.0).abs() < 0.02, "plain {plain_mean} ± {standard_error}");
+    assert!(
+        (plain_mean - 1.0).abs() < 0.02,
+        "plain {plain_mean} ± {standard_error}"
+    );
     assert!((mean - 1.0).abs() < 0.02, "filtered {mean} ± {standard_error}");
-    assert!((mean - plain_mean).abs() < 0.02, "filtered {mean}, plain {plain_mean}");
-    assert!(spread < 0.5 * plain_spread, "filtered spread {spread} against {plain_spread}");
-    let constant = HmdImage::new(48, 48, plain.image.data.iter().map(|h| if h.is_nan() { *h } else { radius }).collect());
+    assert!(
+        (mean - plain_mean).abs() < 0.02,
+        "filtered {mean}, plain {plain_mean}"
+    );
+    assert!(
+        spread < 0.5 * plain_spread,
+        "filtered spread {spread} against {plain_spread}"
+    );
+    let constant = HmdImage::new(
+        48,
+        48,
+        plain
+            .image
+            .data
+            .iter()
+            .map(|h| if h.is_nan() { *h } else { radius })
+            .collect(),
+    );
     let l_diag = scene.diagonal();
     let (f_plain, f_filtered) = (
         f_diff(&constant, &plain.image, l_diag).unwrap().value,
         f_diff(&constant, &filtered.image, l_diag).unwrap().value,
     );
-    assert!(f_filtered < 0.5 * f_plain, "f_diff {f_filtered} against {f_plain}");
+    assert!(
+        f_filtered < 0.5 * f_plain,
+        "f_diff {f_filtered} against {f_plain}"
+    );
     let report = filtered.report.denoise.expect("the report names the filter");
-    assert!(report.filtered && report.params == DenoiseParams::default(), "{report:?}");
+    assert!(
+        report.filtered && report.params == DenoiseParams::default(),
+        "{report:?}"
+    );
 }
 
 /// Floors under a ceiling at height 1: y = 0 where x < 0 and a platform at y = ½ where
@@ -93,10 +123,30 @@ fn step() -> Scene {
         mesh.add_triangle(first, first + 1, first + 2);
         mesh.add_triangle(first, first + 2, first + 3);
     };
-    quad([Vec3::new(-w, 1.0, -w), Vec3::new(w, 1.0, -w), Vec3::new(w, 1.0, w), Vec3::new(-w, 1.0, w)]);
-    quad([Vec3::new(-w, 0.0, -w), Vec3::new(0.0, 0.0, -w), Vec3::new(0.0, 0.0, w), Vec3::new(-w, 0.0, w)]);
-    quad([Vec3::new(0.0, s, -w), Vec3::new(w, s, -w), Vec3::new(w, s, w), Vec3::new(0.0, s, w)]);
-    quad([Vec3::new(0.0, 0.0, -w), Vec3::new(0.0, s, -w), Vec3::new(0.0, s, w), Vec3::new(0.0, 0.0, w)]);
+    quad([
+        Vec3::new(-w, 1.0, -w),
+        Vec3::new(w, 1.0, -w),
+        Vec3::new(w, 1.0, w),
+        Vec3::new(-w, 1.0, w),
+    ]);
+    quad([
+        Vec3::new(-w, 0.0, -w),
+        Vec3::new(0.0, 0.0, -w),
+        Vec3::new(0.0, 0.0, w),
+        Vec3::new(-w, 0.0, w),
+    ]);
+    quad([
+        Vec3::new(0.0, s, -w),
+        Vec3::new(w, s, -w),
+        Vec3::new(w, s, w),
+        Vec3::new(0.0, s, w),
+    ]);
+    quad([
+        Vec3::new(0.0, 0.0, -w),
+        Vec3::new(0.0, s, -w),
+        Vec3::new(0.0, s, w),
+        Vec3::new(0.0, 0.0, w),
+    ]);
     Scene {
         name: "step".into(),
         mesh,
@@ -136,7 +186,9 @@ fn the_filter_does_not_average_across_a_step() {
     // The step is the image's middle column line: x = 0 lies between columns 31 and 32, and
     // the image's right is −x (right = forward × up), so the platform is on the left.
     let columns = |range: std::ops::Range<usize>| -> Vec<usize> {
-        (0..size as usize).flat_map(|row| range.clone().map(move |c| row * size as usize + c)).collect()
+        (0..size as usize)
+            .flat_map(|row| range.clone().map(move |c| row * size as usize + c))
+            .collect()
     };
     for (side, pixels) in [("platform", columns(30..32)), ("below", columns(32..34))] {
         let bias = relative_bias_of_s(&filtered, &reference, &pixels);
@@ -168,12 +220,18 @@ fn the_filtered_error_falls_with_the_rays_towards_the_unfiltered_one() {
         assert!(pair[1] < pair[0], "filtered f_diff by rays {filtered:?}");
     }
     eprintln!("f_diff by rays 16, 64, 256, 1024: filtered {filtered:?}, plain {plain:?}");
-    assert!(filtered[0] < 0.7 * plain[0], "16 rays: {filtered:?} against {plain:?}");
+    assert!(
+        filtered[0] < 0.7 * plain[0],
+        "16 rays: {filtered:?} against {plain:?}"
+    );
     assert!(filtered[1] < plain[1], "64 rays: {filtered:?} against {plain:?}");
     // Filtered and unfiltered errors close in on each other as the tolerance narrows.
     let ratios: Vec<f64> = filtered.iter().zip(&plain).map(|(f, p)| f / p).collect();
     assert!((ratios[3] - 1.0).abs() < 0.1, "1,024 rays: ratios {ratios:?}");
-    assert!((ratios[3] - 1.0).abs() < (ratios[0] - 1.0).abs(), "ratios {ratios:?}");
+    assert!(
+        (ratios[3] - 1.0).abs() < (ratios[0] - 1.0).abs(),
+        "ratios {ratios:?}"
+    );
 }
 
 #[test]
@@ -192,7 +250,12 @@ fn same_bits_for_one_and_two_threads_gather_and_adaptive() {
         let plain = rendered(&scene, estimator, 40, false, Some(2)).image;
         let bits = |i: &HmdImage| i.data.iter().map(|h| h.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&one), bits(&two), "{}", estimator.method());
-        assert_ne!(bits(&one), bits(&plain), "{}: the filter changes the image", estimator.method());
+        assert_ne!(
+            bits(&one),
+            bits(&plain),
+            "{}: the filter changes the image",
+            estimator.method()
+        );
     }
 }
 
@@ -210,17 +273,63 @@ fn uniform_weighting_is_filtered_too() {
 fn the_command_line_refuses_what_the_filter_cannot_do_by_name() {
     use common::cli::refuses;
     let cases: &[(&str, &[&str], &str)] = &[
-        ("photon", &["render", "--size", "8x8", "--method", "photon1", "--photons", "1000", "--denoise"], "cannot filter photon1"),
-        ("irradiance", &["render", "--size", "8x8", "--method", "irradiance", "--denoise"], "irradiance, not H"),
-        ("relerr", &["render", "--size", "8x8", "--aov", "relerr", "--denoise"], "relerr"),
-        ("passes", &["render", "--size", "8x8", "--denoise", "--denoise-passes", "0"], "--denoise-passes must be 1 to 10"),
-        ("radius", &["render", "--size", "8x8", "--denoise", "--denoise-radius", "-1"], "--denoise-radius must be a positive"),
-        ("edge", &["render", "--size", "8x8", "--denoise", "--denoise-edge", "nan"], "--denoise-edge must be a positive"),
-        ("without", &["render", "--size", "8x8", "--denoise-edge", "3"], "--denoise"),
-        ("points", &["points", "p.csv", "h.npy", "--denoise"], "a list of points has no neighbours"),
+        (
+            "photon",
+            &[
+                "render",
+                "--size",
+                "8x8",
+                "--method",
+                "photon1",
+                "--photons",
+                "1000",
+                "--denoise",
+            ],
+            "cannot filter photon1",
+        ),
+        (
+            "irradiance",
+            &["render", "--size", "8x8", "--method", "irradiance", "--denoise"],
+            "irradiance, not H",
+        ),
+        (
+            "relerr",
+            &["render", "--size", "8x8", "--aov", "relerr", "--denoise"],
+            "relerr",
+        ),
+        (
+            "passes",
+            &["render", "--size", "8x8", "--denoise", "--denoise-passes", "0"],
+            "--denoise-passes must be 1 to 10",
+        ),
+        (
+            "radius",
+            &["render", "--size", "8x8", "--denoise", "--denoise-radius", "-1"],
+            "--denoise-radius must be a positive",
+        ),
+        (
+            "edge",
+            &["render", "--size", "8x8", "--denoise", "--denoise-edge", "nan"],
+            "--denoise-edge must be a positive",
+        ),
+        (
+            "without",
+            &["render", "--size", "8x8", "--denoise-edge", "3"],
+            "--denoise",
+        ),
+        (
+            "points",
+            &["points", "p.csv", "h.npy", "--denoise"],
+            "a list of points has no neighbours",
+        ),
     ];
     for (case, args, message) in cases {
-        refuses(&format!("denoise-{case}"), &[("p.csv", b"0 0 0 0 1 0\n")], args, message);
+        refuses(
+            &format!("denoise-{case}"),
+            &[("p.csv", b"0 0 0 0 1 0\n")],
+            args,
+            message,
+        );
     }
 }
 

@@ -835,7 +835,10 @@ fn configure(
         }
     }
     if !denoise && !filter_keys.is_empty() {
-        return Err(value_error(format!("{} needs denoise=True", filter_keys.join(", "))));
+        return Err(value_error(format!(
+            "{} needs denoise=True",
+            filter_keys.join(", ")
+        )));
     }
     o.denoise = denoise.then_some(filter);
     let entry = registry::method(method).map_err(py_error)?;

@@ -157,9 +157,11 @@ fn check<'a>(
 /// at a pixel where the cache has a surface, naming the first such pixel.
 fn check_oracle(oracle: &HmdImage, gbuffer: &crate::estimators::GBuffer) -> Result<()> {
     let width = oracle.width as usize;
-    let bad = oracle.data.iter().zip(&gbuffer.points).position(|(&h, point)| {
-        (h.is_nan() && point.is_some()) || h <= 0.0
-    });
+    let bad = oracle
+        .data
+        .iter()
+        .zip(&gbuffer.points)
+        .position(|(&h, point)| (h.is_nan() && point.is_some()) || h <= 0.0);
     match bad {
         None => Ok(()),
         Some(i) => {

@@ -142,9 +142,11 @@ pub fn relative_errors(
         return Err(Error::invalid("reference", message));
     }
     // An irradiance is a finite non-negative number wherever the cache has a surface.
-    let bad = image.data.iter().zip(&reference.data).position(|(&e, &r)| {
-        r < 0.0 || r.is_infinite() || (r.is_nan() && e.is_finite())
-    });
+    let bad = image
+        .data
+        .iter()
+        .zip(&reference.data)
+        .position(|(&e, &r)| r < 0.0 || r.is_infinite() || (r.is_nan() && e.is_finite()));
     if let Some(i) = bad {
         let (x, y) = (i % w as usize, i / w as usize);
         let message = format!(

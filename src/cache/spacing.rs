@@ -77,7 +77,10 @@ impl Spacing {
             // The methods that estimate H: what hmd: takes (not irradiance).
             let of_h: Vec<&str> = registry::METHODS
                 .iter()
-                .filter(|m| m.build(&Map::new(), &[]).is_ok_and(|e| e.channel() == HMD_CHANNEL))
+                .filter(|m| {
+                    m.build(&Map::new(), &[])
+                        .is_ok_and(|e| e.channel() == HMD_CHANNEL)
+                })
                 .map(|m| m.name)
                 .collect();
             let message = format!("hmd:{method}: '{method}' is not one of {}", of_h.join(", "));
@@ -257,7 +260,10 @@ mod tests {
     fn a_bad_source_is_refused_by_name() {
         for (text, says) in [
             ("nearest", "is not one of"),
-            ("hmd:magic", "'magic' is not one of gather, adaptive, cubemap, photon1, photon2"),
+            (
+                "hmd:magic",
+                "'magic' is not one of gather, adaptive, cubemap, photon1, photon2",
+            ),
             ("hmd:irradiance", "does not estimate H"),
             ("hmd:gather:photons=9", "photons"),
             ("hmd:gather:rays", "NAME=VALUE"),

@@ -194,7 +194,13 @@ impl CacheArgs {
 /// Channel `channel` of the EXR at `path` (`--oracle` or `--reference`, named `flag`), checked
 /// against the cache to come: the same size, and where its JSON sidecar is there, a render of
 /// the same pixels ([`not_the_same_pixels`]).
-fn image_of(path: &Path, channel: &str, flag: &'static str, scene: &Scene, args: &CacheArgs) -> Result<HmdImage> {
+fn image_of(
+    path: &Path,
+    channel: &str,
+    flag: &'static str,
+    scene: &Scene,
+    args: &CacheArgs,
+) -> Result<HmdImage> {
     let size = args.image.options()?;
     let size = (size.width, size.height);
     let image = exr::read_channel(path, channel).map_err(|e| {
@@ -219,7 +225,8 @@ fn image_of(path: &Path, channel: &str, flag: &'static str, scene: &Scene, args:
     let sidecar = path.with_extension("json");
     if sidecar.is_file() {
         let report = RenderReport::read(&sidecar).map_err(|e| {
-            let message = format!(
+            let message =
+                format!(
                 "{}'s sidecar {} is not the report of a render ({}): give the image `hmdist render` wrote{}",
                 path.display(),
                 sidecar.display(),
@@ -256,18 +263,46 @@ fn not_the_same_pixels(report: &RenderReport, scene: &Scene, args: &CacheArgs, o
         }
     };
     if let Some(shard) = &report.shard {
-        differ("a shard's part", format!("{}/{}", shard.index, shard.count), "a whole image".into());
+        differ(
+            "a shard's part",
+            format!("{}/{}", shard.index, shard.count),
+            "a whole image".into(),
+        );
     }
     differ("scene", report.scene.clone(), scene.name.clone());
-    differ("triangles", report.triangles.to_string(), scene.mesh.triangle_count().to_string());
-    differ("bounds", json(&report.bounds), json(&BoundsReport::from(&scene.bounds())));
-    differ("camera", json(&report.camera), json(&CameraReport::from(&scene.camera)));
-    differ("max_distance", format!("{:?}", report.max_distance), format!("{:?}", args.max_distance));
+    differ(
+        "triangles",
+        report.triangles.to_string(),
+        scene.mesh.triangle_count().to_string(),
+    );
+    differ(
+        "bounds",
+        json(&report.bounds),
+        json(&BoundsReport::from(&scene.bounds())),
+    );
+    differ(
+        "camera",
+        json(&report.camera),
+        json(&CameraReport::from(&scene.camera)),
+    );
+    differ(
+        "max_distance",
+        format!("{:?}", report.max_distance),
+        format!("{:?}", args.max_distance),
+    );
     if of_e {
         differ("method", report.method.clone(), "irradiance".into());
-        differ("light", json(&report.light), json(&scene.light.as_ref().map(LightReport::from)));
+        differ(
+            "light",
+            json(&report.light),
+            json(&scene.light.as_ref().map(LightReport::from)),
+        );
         let absorption = report.parameters.number("absorption").map(|a| a as f32);
-        differ("absorption", format!("{absorption:?}"), format!("{:?}", Some(args.irradiance.absorption)));
+        differ(
+            "absorption",
+            format!("{absorption:?}"),
+            format!("{:?}", Some(args.irradiance.absorption)),
+        );
     }
     differences
 }

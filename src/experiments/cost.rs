@@ -242,11 +242,22 @@ fn denoised(runner: &Runner, gathers: &[(u32, f64)]) -> Result<Vec<CostPoint>> {
         let (image, report) = runner.method_image("gather", &super::rays::gather_params(rays), 1)?;
         // One guide per BVH preset the images were rendered with (their primary hits).
         if !guides.iter().any(|(bvh, _)| *bvh == report.bvh) {
-            let bvh = if report.bvh == "high" { BuildQuality::High } else { BuildQuality::Fast };
+            let bvh = if report.bvh == "high" {
+                BuildQuality::High
+            } else {
+                BuildQuality::Fast
+            };
             let samples = vec![1.0; image.data.len()];
-            guides.push((report.bvh.clone(), crate::render::guide(&runner.scene, size, bvh, samples)?));
+            guides.push((
+                report.bvh.clone(),
+                crate::render::guide(&runner.scene, size, bvh, samples)?,
+            ));
         }
-        let guide = &mut guides.iter_mut().find(|(bvh, _)| *bvh == report.bvh).expect("made above").1;
+        let guide = &mut guides
+            .iter_mut()
+            .find(|(bvh, _)| *bvh == report.bvh)
+            .expect("made above")
+            .1;
         guide.samples.fill(rays as f32);
         let start = std::time::Instant::now();
         let filtered = crate::denoise::filter(&image.data, guide, &DenoiseParams::default());

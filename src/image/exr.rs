@@ -82,7 +82,8 @@ pub fn read_guide(path: &Path) -> Result<crate::denoise::Guide> {
         .collect::<Result<Vec<_>>>()?;
     let (width, height) = (channels[0].width, channels[0].height);
     let data: Vec<Vec<f32>> = channels.into_iter().map(|c| c.data).collect();
-    crate::denoise::Guide::from_channels(width, height, &data).map_err(|e| HmdError::file(path, e.to_string()))
+    crate::denoise::Guide::from_channels(width, height, &data)
+        .map_err(|e| HmdError::file(path, e.to_string()))
 }
 
 /// Reads an EXR written by hmdist (or any EXR whose first layer has a `Y` channel, or a

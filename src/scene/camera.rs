@@ -45,7 +45,11 @@ impl Camera {
         }
         let f = self.target - self.eye;
         let (Some(f), Some(up)) = (crate::sampling::unit(f), crate::sampling::unit(self.up)) else {
-            let what = if f == glam::Vec3::ZERO { "eye and target are the same point" } else { "up vector is zero" };
+            let what = if f == glam::Vec3::ZERO {
+                "eye and target are the same point"
+            } else {
+                "up vector is zero"
+            };
             return Err(Error::scene(format!("the camera's {what}")));
         };
         if f.cross(up).length_squared() < 1e-12 {

@@ -80,12 +80,17 @@ struct LightEntry {
 fn three<'de, D: serde::Deserializer<'de>>(deserializer: D) -> std::result::Result<[f32; 3], D::Error> {
     let numbers = Vec::<f32>::deserialize(deserializer)?;
     <[f32; 3]>::try_from(numbers.as_slice()).map_err(|_| {
-        serde::de::Error::custom(format!("expected exactly three numbers [x, y, z], found {}", numbers.len()))
+        serde::de::Error::custom(format!(
+            "expected exactly three numbers [x, y, z], found {}",
+            numbers.len()
+        ))
     })
 }
 
 /// [`three`], where the vector may be left out.
-fn maybe_three<'de, D: serde::Deserializer<'de>>(deserializer: D) -> std::result::Result<Option<[f32; 3]>, D::Error> {
+fn maybe_three<'de, D: serde::Deserializer<'de>>(
+    deserializer: D,
+) -> std::result::Result<Option<[f32; 3]>, D::Error> {
     #[derive(Deserialize)]
     struct Three(#[serde(deserialize_with = "three")] [f32; 3]);
     Ok(Option::<Three>::deserialize(deserializer)?.map(|t| t.0))
