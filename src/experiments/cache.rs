@@ -71,8 +71,12 @@ impl Runner<'_> {
     /// Creates the output folder and its cache, which the runner leaves alone until it has
     /// something to write (a run refused for a bad flag creates nothing).
     pub(super) fn make_cache(&self) -> Result<()> {
+        if self.cache.exists() && !self.cache.is_dir() {
+            let message = "is not a folder: the experiments keep their image cache there (move it away, or take another --out)";
+            return Err(Error::file(&self.cache, message));
+        }
         std::fs::create_dir_all(&self.cache)
-            .map_err(|e| Error::io(&self.out, "create the output folder of", e))
+            .map_err(|e| Error::io(&self.cache, "create the image cache folder of", e))
     }
 
     /// How many parts an image is rendered in: [`PARTS`] where it casts at least

@@ -121,6 +121,7 @@ impl Runner<'_> {
     /// only renders its share of the images, and a plan only calibrates (see [`plan`]).
     pub fn run(&mut self, name: &str) -> Result<()> {
         let experiments = select(name)?;
+        let made_cache = !self.cache.exists();
         self.make_cache()?;
         self.running = experiments.iter().map(|e| e.name).collect();
         for experiment in &experiments {
@@ -152,6 +153,11 @@ impl Runner<'_> {
         }
         match (&self.shard, &self.plan) {
             (Some(_), _) | (_, Some(_)) => {
+                // A plan caches nothing: the image cache it made for its calibrations goes
+                // again where it stayed empty.
+                if self.plan.is_some() && made_cache {
+                    let _ = std::fs::remove_dir(&self.cache);
+                }
                 std::fs::remove_dir_all(&self.out).map_err(|e| Error::io(&self.out, "remove", e))
             }
             (None, None) => report::write(self),
