@@ -276,7 +276,10 @@ fn gradients_keep_the_records_and_lower_the_error_neighbour_clamping_adds_record
 /// `hmdist cache ARGS` in `dir`: its exit status and stderr.
 fn cache_in(dir: &Scratch, extra: &[&str]) -> (Option<i32>, String) {
     let out = common::cli::hmdist(dir.path(), &cache_args("c.exr", extra));
-    (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned())
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
 }
 
 /// The image at `from` with `change` applied to its data, written to `to` (no sidecar).
@@ -290,30 +293,78 @@ fn edited(dir: &Scratch, from: &str, channel: &str, to: &str, change: impl FnOnc
 #[test]
 fn an_oracle_or_a_reference_that_is_not_h_or_e_of_these_pixels_is_refused_by_what_it_holds() {
     let dir = Scratch::new("cache-hostile-images");
-    hmdist_ok(dir.path(), &["render", "--quiet", "--size", SIZE, "--rays", "16", "--out", "h.exr"]);
+    hmdist_ok(
+        dir.path(),
+        &[
+            "render", "--quiet", "--size", SIZE, "--rays", "16", "--out", "h.exr",
+        ],
+    );
     irradiance(&dir, "e.exr", ("cube", SIZE, "4"));
     // A negative H made neighbour clamping loop for ever; NaN and -inf are no H either.
-    for (name, value) in [("negative.exr", -1.0f32), ("nan.exr", f32::NAN), ("minus-inf.exr", f32::NEG_INFINITY)] {
+    for (name, value) in [
+        ("negative.exr", -1.0f32),
+        ("nan.exr", f32::NAN),
+        ("minus-inf.exr", f32::NEG_INFINITY),
+    ] {
         edited(&dir, "h.exr", "Y", name, |d| d[100] = value);
-        let (code, stderr) = cache_in(&dir, &["--spacing", "oracle", "--oracle", name, "--neighbour-clamp"]);
+        let (code, stderr) = cache_in(
+            &dir,
+            &["--spacing", "oracle", "--oracle", name, "--neighbour-clamp"],
+        );
         assert_eq!(code, Some(2), "{name}: {stderr}");
-        assert!(stderr.contains("--oracle holds H =") && stderr.contains("pixel (36, 1)"), "{name}: {stderr}");
+        assert!(
+            stderr.contains("--oracle holds H =") && stderr.contains("pixel (36, 1)"),
+            "{name}: {stderr}"
+        );
     }
     // A reference that is no irradiance: negative, infinite, or NaN where the cache sees a surface.
-    for (name, value) in [("e-negative.exr", -0.5f32), ("e-inf.exr", f32::INFINITY), ("e-nan.exr", f32::NAN)] {
+    for (name, value) in [
+        ("e-negative.exr", -0.5f32),
+        ("e-inf.exr", f32::INFINITY),
+        ("e-nan.exr", f32::NAN),
+    ] {
         edited(&dir, "e.exr", "E", name, |d| d[7] = value);
         let (code, stderr) = cache_in(&dir, &["--reference", name]);
         assert_eq!(code, Some(2), "{name}: {stderr}");
-        assert!(stderr.contains("holds E =") && stderr.contains("pixel (7, 0)"), "{name}: {stderr}");
+        assert!(
+            stderr.contains("holds E =") && stderr.contains("pixel (7, 0)"),
+            "{name}: {stderr}"
+        );
     }
     // Renders of other pixels: another absorption, a shard's part, an image of H.
     hmdist_ok(
         dir.path(),
-        &["render", "--quiet", "--method", "irradiance", "--size", SIZE, "--rays", "4", "--absorption", "0.5", "--out", "e-half.exr"],
+        &[
+            "render",
+            "--quiet",
+            "--method",
+            "irradiance",
+            "--size",
+            SIZE,
+            "--rays",
+            "4",
+            "--absorption",
+            "0.5",
+            "--out",
+            "e-half.exr",
+        ],
     );
     hmdist_ok(
         dir.path(),
-        &["render", "--quiet", "--method", "irradiance", "--size", SIZE, "--rays", "4", "--shard", "0/2", "--out", "e-part.exr"],
+        &[
+            "render",
+            "--quiet",
+            "--method",
+            "irradiance",
+            "--size",
+            SIZE,
+            "--rays",
+            "4",
+            "--shard",
+            "0/2",
+            "--out",
+            "e-part.exr",
+        ],
     );
     for (name, says) in [
         ("e-half.exr", "absorption (Some(0.5) against Some(0.2))"),
@@ -321,13 +372,20 @@ fn an_oracle_or_a_reference_that_is_not_h_or_e_of_these_pixels_is_refused_by_wha
     ] {
         let (code, stderr) = cache_in(&dir, &["--reference", name]);
         assert_eq!(code, Some(2), "{name}: {stderr}");
-        assert!(stderr.contains("is not an image of the pixels this cache makes") && stderr.contains(says), "{name}: {stderr}");
+        assert!(
+            stderr.contains("is not an image of the pixels this cache makes") && stderr.contains(says),
+            "{name}: {stderr}"
+        );
     }
     // The sidecar of a reference is an input too: --json may not overwrite it.
     let before = std::fs::read(dir.join("e.json")).unwrap();
     let (code, stderr) = cache_in(&dir, &["--reference", "e.exr", "--json", "e.json"]);
     assert_eq!(code, Some(2), "{stderr}");
-    assert_eq!(std::fs::read(dir.join("e.json")).unwrap(), before, "the reference's report is kept");
+    assert_eq!(
+        std::fs::read(dir.join("e.json")).unwrap(),
+        before,
+        "the reference's report is kept"
+    );
     assert!(!dir.join("c.exr").exists());
 }
 
@@ -335,14 +393,20 @@ fn an_oracle_or_a_reference_that_is_not_h_or_e_of_these_pixels_is_refused_by_wha
 fn a_light_that_reaches_nothing_the_camera_sees_is_a_valid_cache_with_no_error() {
     // E = 0 everywhere is an answer, not a reference "of another scene".
     let dir = Scratch::new("cache-dark");
-    dir.write("floor.obj", "v -5 0 -5\nv 5 0 -5\nv 5 0 5\nv -5 0 5\nf 1 2 3\nf 1 3 4\n");
+    dir.write(
+        "floor.obj",
+        "v -5 0 -5\nv 5 0 -5\nv 5 0 5\nv -5 0 5\nf 1 2 3\nf 1 3 4\n",
+    );
     dir.write(
         "dark.toml",
         "[[mesh]]\npath = \"floor.obj\"\n[camera]\neye = [0, 3, 3]\ntarget = [0, 0, 0]\nfov_y_deg = 60\n\
          [light]\nposition = [0, -1, 0]\ndirection = [0, -1, 0]\ncone_half_angle_deg = 30\n",
     );
     irradiance(&dir, "e.exr", ("dark.toml", SIZE, "4"));
-    hmdist_ok(dir.path(), &cache_args("c.exr", &["--scene", "dark.toml", "--reference", "e.exr"]));
+    hmdist_ok(
+        dir.path(),
+        &cache_args("c.exr", &["--scene", "dark.toml", "--reference", "e.exr"]),
+    );
     let report = read_json(&dir.join("c.json"));
     assert_eq!(report["reference"]["mean_relative_error"], 0.0, "{report}");
 }

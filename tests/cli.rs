@@ -95,18 +95,40 @@ fn flags_that_cannot_work_are_refused_before_anything_is_made() {
     let dir = Scratch::new("experiment-cache-file");
     std::fs::create_dir(dir.join("o")).unwrap();
     dir.write("o/cache", "not a folder");
-    let table1 = ["experiment", "table1", "--scene", "slab", "--size", "8", "--quiet", "--out", "o"];
+    let table1 = [
+        "experiment",
+        "table1",
+        "--scene",
+        "slab",
+        "--size",
+        "8",
+        "--quiet",
+        "--out",
+        "o",
+    ];
     let out = hmdist(dir.path(), &table1);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(
-        stderr.contains("o/cache") && stderr.contains("is not a folder: the experiments keep their image cache there"),
+        stderr.contains("o/cache")
+            && stderr.contains("is not a folder: the experiments keep their image cache there"),
         "{stderr}"
     );
     assert_eq!(std::fs::read(dir.join("o/cache")).unwrap(), b"not a folder");
     // A plan writes its plan and leaves no empty image cache behind.
     let dir = Scratch::new("plan-no-cache");
-    let plan = ["experiment", "table1", "--scene", "slab", "--size", "8", "--plan", "--quiet", "--out", "o"];
+    let plan = [
+        "experiment",
+        "table1",
+        "--scene",
+        "slab",
+        "--size",
+        "8",
+        "--plan",
+        "--quiet",
+        "--out",
+        "o",
+    ];
     let out = hmdist(dir.path(), &plan);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(dir.join("o/plan.json").exists());

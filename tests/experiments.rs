@@ -303,7 +303,11 @@ fn a_plan_lists_each_image_once_and_exactly_those_a_run_then_renders_once_each()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     files.sort();
-    assert_eq!(files, ["plan.csv", "plan.json", "plan.md"], "no image cache, not even an empty one");
+    assert_eq!(
+        files,
+        ["plan.csv", "plan.json", "plan.md"],
+        "no image cache, not even an empty one"
+    );
 
     let renders = Renders::default();
     let mut runner = Runner::new("slab", Preset::Quick, &out, &renders).unwrap();
@@ -704,9 +708,17 @@ fn the_cost_plot_has_every_image_of_tables_1_to_3_and_its_front_is_the_undominat
         let (a, b) = (at(&cost, ours, "seconds"), at(&table2, row, "gather s"));
         assert!((a - b).abs() <= 1e-3 * b.max(1.0), "{a} against Table 2's {b}");
         // The denoised gather costs its gather and the filter, and is its own image.
-        let denoised = cost.rows.iter().find(|r| r[0] == "gather + denoise" && r[1] == n).unwrap();
+        let denoised = cost
+            .rows
+            .iter()
+            .find(|r| r[0] == "gather + denoise" && r[1] == n)
+            .unwrap();
         assert!(at(&cost, denoised, "seconds") > b, "{denoised:?}");
-        assert_ne!(at(&cost, denoised, "f_diff"), at(&cost, ours, "f_diff"), "{denoised:?}");
+        assert_ne!(
+            at(&cost, denoised, "f_diff"),
+            at(&cost, ours, "f_diff"),
+            "{denoised:?}"
+        );
     }
     for row in &table3.rows {
         let k = row[table3.column("K").unwrap()].clone();

@@ -339,7 +339,11 @@ fn stops_soon_after_sigterm(case: &str, args: &[&str]) {
     let after = started.elapsed().saturating_sub(Duration::from_secs(1));
     assert_eq!(code, Some(143), "{case}: {stderr}");
     assert!(after < Duration::from_secs(2), "{case}: {after:?} after SIGTERM");
-    assert_eq!(outputs(dir.path(), &[]), Vec::<String>::new(), "{case}: no output, no temporary");
+    assert_eq!(
+        outputs(dir.path(), &[]),
+        Vec::<String>::new(),
+        "{case}: no output, no temporary"
+    );
 }
 
 #[cfg(unix)]
@@ -349,10 +353,30 @@ fn sigterm_inside_one_points_millions_of_rays_stops_irradiance_and_the_cache() {
     // pixels: before, 8² pixels of 10⁷ rays took 6–17 s to stop, a record of 4·10⁹ rays 1,422 s.
     stops_soon_after_sigterm(
         "sigterm-irradiance",
-        &["render", "--method", "irradiance", "--size", "2x2", "--rays", "2000000000", "--threads", "1"],
+        &[
+            "render",
+            "--method",
+            "irradiance",
+            "--size",
+            "2x2",
+            "--rays",
+            "2000000000",
+            "--threads",
+            "1",
+        ],
     );
     stops_soon_after_sigterm(
         "sigterm-cache",
-        &["cache", "--size", "2x2", "--rays", "2000000000", "--threads", "1", "--out", "c.exr"],
+        &[
+            "cache",
+            "--size",
+            "2x2",
+            "--rays",
+            "2000000000",
+            "--threads",
+            "1",
+            "--out",
+            "c.exr",
+        ],
     );
 }

@@ -410,9 +410,17 @@ fn bad_toml_files_name_the_file_and_line() {
     assert_fails(&dir, "# nothing\n", "empty.toml: the scene names no meshes");
     // Exactly three numbers: a fourth is not ignored, two are not enough.
     let four = format!("{mesh}{}", light.replace("[0, 1, 0]", "[0, 9.8, 0, 123]"));
-    assert_fails(&dir, four, "four.toml:4: expected exactly three numbers [x, y, z], found 4");
+    assert_fails(
+        &dir,
+        four,
+        "four.toml:4: expected exactly three numbers [x, y, z], found 4",
+    );
     let eye = format!("{mesh}{}", camera.replace("[0, 0, 5]", "[0, 5]"));
-    assert_fails(&dir, eye, "eye.toml:4: expected exactly three numbers [x, y, z], found 2");
+    assert_fails(
+        &dir,
+        eye,
+        "eye.toml:4: expected exactly three numbers [x, y, z], found 2",
+    );
 }
 
 #[test]
@@ -421,8 +429,12 @@ fn a_light_direction_of_any_finite_length_is_the_unit_direction() {
     let dir = Scratch::new("toml-light-length");
     dir.write("t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     for (name, direction) in [("huge", "[0, -3e19, 0]"), ("tiny", "[0, -1e-25, 0]")] {
-        let light = format!("[light]\nposition = [0, 1, 0]\ndirection = {direction}\ncone_half_angle_deg = 30\n");
-        let path = dir.write(&format!("{name}.toml"), format!("[[mesh]]\npath = \"t.obj\"\n{light}"));
+        let light =
+            format!("[light]\nposition = [0, 1, 0]\ndirection = {direction}\ncone_half_angle_deg = 30\n");
+        let path = dir.write(
+            &format!("{name}.toml"),
+            format!("[[mesh]]\npath = \"t.obj\"\n{light}"),
+        );
         let scene = Scene::load(path.to_str().unwrap()).unwrap();
         assert_eq!(scene.light.unwrap().direction, glam::Vec3::NEG_Y, "{name}");
     }

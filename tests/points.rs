@@ -353,8 +353,17 @@ fn hmdist_points_refuses_bad_input() {
 fn points_of_csv(case: &str, text: &str) -> Vec<String> {
     let dir = Scratch::new(case);
     dir.write("in.csv", text.as_bytes());
-    hmdist_ok(dir.path(), &["points", "--quiet", "--scene", "slab", "--rays", "16", "in.csv", "h.csv"]);
-    std::fs::read_to_string(dir.join("h.csv")).unwrap().lines().map(String::from).collect()
+    hmdist_ok(
+        dir.path(),
+        &[
+            "points", "--quiet", "--scene", "slab", "--rays", "16", "in.csv", "h.csv",
+        ],
+    );
+    std::fs::read_to_string(dir.join("h.csv"))
+        .unwrap()
+        .lines()
+        .map(String::from)
+        .collect()
 }
 
 #[test]
@@ -364,12 +373,20 @@ fn a_csv_header_is_recognised_by_what_it_is_not_by_failing_to_parse() {
     assert_eq!(plain.len(), 3);
     // A byte-order mark, a header, a trailing comment: the same three rows.
     assert_eq!(points_of_csv("csv-bom", &format!("\u{feff}{rows}")), plain);
-    assert_eq!(points_of_csv("csv-bom-header", &format!("\u{feff}x,y,z,nx,ny,nz\n{rows}")), plain);
+    assert_eq!(
+        points_of_csv("csv-bom-header", &format!("\u{feff}x,y,z,nx,ny,nz\n{rows}")),
+        plain
+    );
     let commented = rows.replacen("0,0.5,0,0,1,0\n", "0,0.5,0,0,1,0  # the first\n", 1);
     assert_eq!(points_of_csv("csv-comment", &commented), plain);
     // A typo in the first row is a bad row, not a header.
     let typo = rows.replacen("0,0.5,0,", "0,0.5,x0,", 1);
-    refuses("csv-typo", &[("in.csv", typo.as_bytes())], &["points", "--scene", "slab", "in.csv", "h.csv"], "in.csv:1: expected 6 numbers");
+    refuses(
+        "csv-typo",
+        &[("in.csv", typo.as_bytes())],
+        &["points", "--scene", "slab", "in.csv", "h.csv"],
+        "in.csv:1: expected 6 numbers",
+    );
 }
 
 #[test]

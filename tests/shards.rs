@@ -53,7 +53,17 @@ fn four_shards_merged_in_any_order_give_the_one_machine_exr_byte_for_byte() {
         ),
         (
             "cubemap-denoise",
-            vec!["--size", "40x27", "--method", "cubemap", "--backend", "cpu", "--rays", "16", "--denoise"],
+            vec![
+                "--size",
+                "40x27",
+                "--method",
+                "cubemap",
+                "--backend",
+                "cpu",
+                "--rays",
+                "16",
+                "--denoise",
+            ],
         ),
         // Not H: its channel is E, which merge must read and write as E.
         (
@@ -107,7 +117,10 @@ fn four_shards_merged_in_any_order_give_the_one_machine_exr_byte_for_byte() {
         }
         if name.ends_with("denoise") {
             let part = common::cli::read_json(&dir.join("part0.json"));
-            assert_eq!(part["denoise"]["filtered"], false, "{name}: a part is not filtered");
+            assert_eq!(
+                part["denoise"]["filtered"], false,
+                "{name}: a part is not filtered"
+            );
             assert_eq!(merged["denoise"]["filtered"], true, "{name}: the merge filters");
             assert_eq!(merged["denoise"]["edge"], one["denoise"]["edge"], "{name}");
         }

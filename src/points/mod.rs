@@ -52,7 +52,10 @@ impl SurfacePoint {
             normal
         } else {
             crate::sampling::unit(normal).ok_or_else(|| {
-                Error::invalid("points", format!("must have a non-zero normal, not {normal} at {point}"))
+                Error::invalid(
+                    "points",
+                    format!("must have a non-zero normal, not {normal} at {point}"),
+                )
             })?
         };
         Ok(SurfacePoint {

@@ -29,7 +29,10 @@ pub fn light_advice(scene: &Scene) -> String {
     } else if scene.name.ends_with(".toml") {
         "add a [light] to its TOML file".into()
     } else {
-        format!("place '{}' in a TOML file with a [light] (guide: the TOML format)", scene.name)
+        format!(
+            "place '{}' in a TOML file with a [light] (guide: the TOML format)",
+            scene.name
+        )
     }
 }
 
