@@ -3,10 +3,9 @@
 //!
 //! An import is a `crate::`, `super::` or `self::` path outside comments, resolved to the
 //! longest module path that is a file; a module's paths into its own descendants (its `mod`
-//! declarations and re-exports) are not counted. The same rule as the workplace's
-//! `rscycles.py`, so the two agree. A third check sees what that rule leaves out: a parent
-//! module that uses a child (`child::f()`, beyond declaring and re-exporting it) while the
-//! child imports the parent (`super::X`) is a pair that import each other too.
+//! declarations and re-exports) are not counted. A third check sees what that rule leaves
+//! out: a parent module that uses a child (`child::f()`, beyond declaring and re-exporting
+//! it) while the child imports the parent (`super::X`) is a pair that import each other too.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
