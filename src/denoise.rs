@@ -211,6 +211,7 @@ pub fn filter(hmd: &[f32], guide: &Guide, params: &DenoiseParams) -> Vec<f32> {
         })
         .collect();
     let width = guide.width as usize;
+    let scales = Scales::of(params);
     let mut next = pixels.clone();
     for pass in 0..params.passes {
         let step = 1usize << pass;
@@ -218,7 +219,7 @@ pub fn filter(hmd: &[f32], guide: &Guide, params: &DenoiseParams) -> Vec<f32> {
             .enumerate()
             .for_each(|(y, row)| {
                 for (x, out) in row.iter_mut().enumerate() {
-                    *out = filtered(&pixels, (guide.width, guide.height), (x, y), step, params);
+                    *out = filtered(&pixels, (guide.width, guide.height), (x, y), step, &scales);
                 }
             });
         std::mem::swap(&mut pixels, &mut next);
@@ -229,6 +230,23 @@ pub fn filter(hmd: &[f32], guide: &Guide, params: &DenoiseParams) -> Vec<f32> {
         .collect()
 }
 
+/// The weights' `1/2σ²` factors, worked out once per image.
+struct Scales {
+    radius: f32,
+    plane: f32,
+    edge: f32,
+}
+
+impl Scales {
+    fn of(params: &DenoiseParams) -> Scales {
+        Scales {
+            radius: 0.5 / (params.radius * params.radius),
+            plane: 0.5 / (PLANE * PLANE),
+            edge: 0.5 / (params.edge * params.edge),
+        }
+    }
+}
+
 /// Pixel `(x, y)` after one pass with taps `step` pixels apart.
 #[inline]
 fn filtered(
@@ -236,16 +254,13 @@ fn filtered(
     (width, height): (u32, u32),
     (x, y): (usize, usize),
     step: usize,
-    params: &DenoiseParams,
+    scales: &Scales,
 ) -> Pixel {
     let width = width as usize;
     let centre = pixels[y * width + x];
     if !centre.valid {
         return centre;
     }
-    let inv_radius2 = 0.5 / (params.radius * params.radius);
-    let inv_plane2 = 0.5 / (PLANE * PLANE);
-    let inv_edge2 = 0.5 / (params.edge * params.edge);
     let (mut sum_w, mut sum_s, mut sum_v) = (0.0f32, 0.0f32, 0.0f32);
     for (dy, ty) in TAPS.iter().enumerate() {
         let Some(row) = (y + dy * step)
@@ -265,7 +280,7 @@ fn filtered(
             let w = if (dx, dy) == (2, 2) {
                 tx * ty
             } else {
-                tx * ty * affinity(&centre, other, (inv_radius2, inv_plane2, inv_edge2))
+                tx * ty * affinity(&centre, other, scales)
             };
             sum_w += w;
             sum_s += w * other.s;
@@ -283,7 +298,7 @@ fn filtered(
 /// How much of its tap a neighbour `b` of `a` keeps, symmetric in the two: the product of the
 /// distance, plane, normal and tolerance terms of the module's docs.
 #[inline]
-fn affinity(a: &Pixel, b: &Pixel, (inv_radius2, inv_plane2, inv_edge2): (f32, f32, f32)) -> f32 {
+fn affinity(a: &Pixel, b: &Pixel, scales: &Scales) -> f32 {
     let cos = a.normal.dot(b.normal);
     if cos <= 0.0 {
         return 0.0;
@@ -291,13 +306,13 @@ fn affinity(a: &Pixel, b: &Pixel, (inv_radius2, inv_plane2, inv_edge2): (f32, f3
     let offset = b.point - a.point;
     let scale = a.s.max(b.s);
     let scale2 = scale * scale;
-    let apart = offset.length_squared() * scale2 * inv_radius2;
+    let apart = offset.length_squared() * scale2 * scales.radius;
     let height = a.normal.dot(offset).abs().max(b.normal.dot(offset).abs());
-    let off_plane = height * height * scale2 * inv_plane2;
+    let off_plane = height * height * scale2 * scales.plane;
     let ds = a.s - b.s;
     let variance = a.variance + b.variance;
     let differ = if variance > 0.0 {
-        ds * ds * inv_edge2 / variance
+        ds * ds * scales.edge / variance
     } else if ds == 0.0 {
         0.0
     } else {

@@ -52,10 +52,12 @@ impl Rendered {
             .first()
             .map_or(crate::image::exr::CHANNEL, String::as_str);
         let guide = self.guide.as_ref().map(Guide::channels).unwrap_or_default();
-        let mut channels: Vec<(&str, &[f32])> = vec![(channel, &self.image.data)];
-        channels.extend(self.aovs.iter().map(|aov| (aov.aov.name(), &aov.data[..])));
-        channels.extend(GUIDE_CHANNELS.iter().copied().zip(guide.iter().map(|c| &c[..])));
-        crate::image::exr::encode_channels(&channels, (self.image.width, self.image.height), path)
+        let extra: Vec<(&str, &[f32])> = GUIDE_CHANNELS
+            .iter()
+            .copied()
+            .zip(guide.iter().map(|c| &c[..]))
+            .collect();
+        crate::image::exr::encode_with(channel, &self.image, &self.aovs, &extra, path)
     }
 
     /// The channels a shard's rows hash covers: H, the AOVs, and the guide where there is one.

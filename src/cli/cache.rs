@@ -118,12 +118,12 @@ pub fn run(args: CacheArgs) -> Result<()> {
     let oracle = args
         .oracle
         .as_deref()
-        .map(|path| image_of(path, exr::CHANNEL, "oracle", &scene, &args))
+        .map(|path| image_of(path, exr::CHANNEL, "oracle", &scene, (&args, size)))
         .transpose()?;
     let reference = args
         .reference
         .as_deref()
-        .map(|path| image_of(path, exr::IRRADIANCE_CHANNEL, "reference", &scene, &args))
+        .map(|path| image_of(path, exr::IRRADIANCE_CHANNEL, "reference", &scene, (&args, size)))
         .transpose()?;
     bar.status("BVH");
     let mut cached = cache(&scene, &params, &options, oracle.as_ref(), &bar)?;
@@ -199,10 +199,8 @@ fn image_of(
     channel: &str,
     flag: &'static str,
     scene: &Scene,
-    args: &CacheArgs,
+    (args, size): (&CacheArgs, (u32, u32)),
 ) -> Result<HmdImage> {
-    let size = args.image.options()?;
-    let size = (size.width, size.height);
     let image = exr::read_channel(path, channel).map_err(|e| {
         let hint = if channel == exr::IRRADIANCE_CHANNEL {
             "make one with hmdist render --method irradiance"
@@ -255,7 +253,6 @@ fn image_of(
 /// an estimate's noise, not what it estimates.
 fn not_the_same_pixels(report: &RenderReport, scene: &Scene, args: &CacheArgs, of_e: bool) -> Vec<String> {
     use hmdist::report::{BoundsReport, CameraReport, LightReport};
-    let json = |v: &dyn erased::Json| v.json();
     let mut differences = vec![];
     let mut differ = |what: &str, theirs: String, ours: String| {
         if theirs != ours {
@@ -307,14 +304,7 @@ fn not_the_same_pixels(report: &RenderReport, scene: &Scene, args: &CacheArgs, o
     differences
 }
 
-/// Values as JSON text, to compare report parts that have no `PartialEq`.
-mod erased {
-    pub trait Json {
-        fn json(&self) -> String;
-    }
-    impl<T: serde::Serialize> Json for T {
-        fn json(&self) -> String {
-            serde_json::to_string(self).expect("a report part serialises")
-        }
-    }
+/// `value` as JSON text, to compare report parts that have no `PartialEq`.
+fn json(value: &impl serde::Serialize) -> String {
+    serde_json::to_string(value).expect("a report part serialises")
 }

@@ -32,8 +32,21 @@ pub fn encode(image: &HmdImage, aovs: &[AovImage], path: &Path) -> Result<Vec<u8
 /// [`encode`] with the image's channel named `channel` (an estimator's
 /// [`crate::estimators::Estimator::channel`]).
 pub fn encode_as(channel: &str, image: &HmdImage, aovs: &[AovImage], path: &Path) -> Result<Vec<u8>> {
+    encode_with(channel, image, aovs, &[], path)
+}
+
+/// [`encode_as`] with `extra` channels `(name, values)` after the AOVs (a shard's part of a
+/// denoised render: the filter's guide).
+pub fn encode_with(
+    channel: &str,
+    image: &HmdImage,
+    aovs: &[AovImage],
+    extra: &[(&str, &[f32])],
+    path: &Path,
+) -> Result<Vec<u8>> {
     let mut channels: Vec<(&str, &[f32])> = vec![(channel, &image.data)];
     channels.extend(aovs.iter().map(|aov| (aov.aov.name(), &aov.data[..])));
+    channels.extend_from_slice(extra);
     encode_channels(&channels, (image.width, image.height), path)
 }
 
