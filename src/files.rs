@@ -1,6 +1,11 @@
 //! Reading the user's files safely, and keeping outputs off them: only regular files are
 //! read (a FIFO would block forever, `/dev/zero` never ends), a read takes no more than the
 //! file's size, and an output may not be any file the same command reads.
+//!
+//! Every file of the user's that hmdist reads is read by [`read_regular`] (or [`read_text`]
+//! over it). Where the environment variable [`READS_LOG`] names a file, each path read is
+//! appended to it, one per line: how a test (or a user staging a job's inputs on a cluster)
+//! finds every file a command reads without a list kept by hand.
 
 use std::io::Read;
 use std::path::Path;
@@ -11,6 +16,7 @@ use crate::error::{Error, Result};
 /// socket or directory is refused before it is opened, and the read stops at the size the
 /// file had when it was looked at, so a file that grows meanwhile cannot make it run on.
 pub fn read_regular(path: &Path) -> Result<Vec<u8>> {
+    log_read(path);
     let metadata = std::fs::metadata(path).map_err(|e| Error::io(path, "read", e))?;
     if !metadata.is_file() {
         return Err(Error::file(path, not_regular(&metadata)));
@@ -21,6 +27,28 @@ pub fn read_regular(path: &Path) -> Result<Vec<u8>> {
         .read_to_end(&mut bytes)
         .map_err(|e| Error::io(path, "read", e))?;
     Ok(bytes)
+}
+
+/// [`read_regular`] as UTF-8 text (a JSON report, a sidecar).
+pub fn read_text(path: &Path) -> Result<String> {
+    String::from_utf8(read_regular(path)?).map_err(|_| Error::file(path, "is not UTF-8 text"))
+}
+
+/// The environment variable naming the file that every path read is appended to.
+pub const READS_LOG: &str = "HMDIST_READS";
+
+/// Appends `path` to the [`READS_LOG`] file, where one is named. A log that cannot be written
+/// changes nothing of the command's own work.
+fn log_read(path: &Path) {
+    let Some(log) = std::env::var_os(READS_LOG) else {
+        return;
+    };
+    let line = format!("{}\n", path.display());
+    let _ = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(log)
+        .and_then(|mut file| std::io::Write::write_all(&mut file, line.as_bytes()));
 }
 
 /// What a path that is not a regular file is, for a message.

@@ -391,11 +391,13 @@ fn an_oracle_or_a_reference_that_is_not_h_or_e_of_these_pixels_is_refused_by_wha
 
 #[test]
 fn a_light_that_reaches_nothing_the_camera_sees_is_a_valid_cache_with_no_error() {
-    // E = 0 everywhere is an answer, not a reference "of another scene".
+    // E = 0 everywhere is an answer, not a reference "of another scene". The light lights a
+    // second floor under the first, which nothing the camera sees can see.
     let dir = Scratch::new("cache-dark");
     dir.write(
         "floor.obj",
-        "v -5 0 -5\nv 5 0 -5\nv 5 0 5\nv -5 0 5\nf 1 2 3\nf 1 3 4\n",
+        "v -5 0 -5\nv 5 0 -5\nv 5 0 5\nv -5 0 5\nv -5 -3 -5\nv 5 -3 -5\nv 5 -3 5\nv -5 -3 5\n\
+         f 1 2 3\nf 1 3 4\nf 5 6 7\nf 5 7 8\n",
     );
     dir.write(
         "dark.toml",
@@ -409,4 +411,38 @@ fn a_light_that_reaches_nothing_the_camera_sees_is_a_valid_cache_with_no_error()
     );
     let report = read_json(&dir.join("c.json"));
     assert_eq!(report["reference"]["mean_relative_error"], 0.0, "{report}");
+    // The cache study of such a scene says there is nothing to rank, and draws no plot of
+    // zeros on log axes.
+    hmdist_ok(
+        dir.path(),
+        &[
+            "experiment",
+            "cache",
+            "--quiet",
+            "--scene",
+            "dark.toml",
+            "--size",
+            "16",
+            "--out",
+            "x",
+        ],
+    );
+    let html = std::fs::read_to_string(dir.join("x/index.html")).unwrap();
+    assert!(html.contains("Nothing to rank: the light reaches nothing the camera sees"));
+    assert!(!dir.join("x/cache.svg").exists() && dir.join("x/cache.md").is_file());
+}
+
+#[test]
+fn a_reference_made_by_cache_is_named_as_such() {
+    // A cache's image is what a reference measures: given as one, its report is named for
+    // what it is, not as a report missing a field.
+    let dir = Scratch::new("cache-of-cache");
+    hmdist_ok(dir.path(), &cache_args("first.exr", &[]));
+    let (code, stderr) = cache_in(&dir, &["--reference", "first.exr"]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(
+        stderr.contains("first.json is the report of `hmdist cache`") && !stderr.contains("missing field"),
+        "{stderr}"
+    );
+    assert!(!dir.join("c.exr").exists());
 }

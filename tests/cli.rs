@@ -3,9 +3,10 @@
 
 mod common;
 
-use common::cli::{hmdist, outputs, read_json, refuses, render_args};
+use common::cli::{hmdist, hmdist_ok, outputs, read_json, refuses, render_args};
 use common::Scratch;
 use glam::DVec3;
+use std::process::Command;
 
 #[test]
 fn bad_parameters_exit_2_with_a_message_and_no_output() {
@@ -154,7 +155,6 @@ fn flags_that_cannot_work_are_refused_before_anything_is_made() {
 
 #[test]
 fn no_output_lands_on_an_input_a_device_or_what_a_failed_run_would_replace() {
-    use common::cli::hmdist_ok;
     let dir = Scratch::new("cli-inputs-kept");
     let run = |args: &[&str]| hmdist(dir.path(), args);
     let refused = |args: &[&str], message: &str| {
@@ -262,6 +262,225 @@ fn no_output_lands_on_an_input_a_device_or_what_a_failed_run_would_replace() {
         .filter(|n| n.starts_with('.') || n.starts_with("f.") || n.starts_with("n."))
         .collect();
     assert!(left.is_empty(), "no temporary or partial output: {left:?}");
+}
+
+/// The promise above as a property: for every command that writes, the files it reads are
+/// found by the code that opens them (`HMDIST_READS` logs each path read), and each of them
+/// named as each of the command's outputs is refused, exit 2, and left as it was.
+#[test]
+fn no_command_writes_over_any_file_it_reads() {
+    let dir = common::cli::floor_scene("reads-property");
+    // A TOML scene of two meshes, one OBJ and one PLY: both are read through the scene.
+    dir.write(
+        "box.ply",
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+         property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+         -0.5 1 -0.5\n0.5 1 -0.5\n0 1 0.5\n3 0 1 2\n",
+    );
+    let toml = std::fs::read_to_string(dir.join("floor.toml")).unwrap();
+    dir.write("s.toml", format!("{toml}[[mesh]]\npath = \"box.ply\"\n"));
+    let tiny = ["--quiet", "--scene", "s.toml", "--size", "8x8"];
+    let setup: [&[&str]; 7] = [
+        &["render", "--rays", "4", "--out", "h.exr"],
+        &["render", "--rays", "4", "--seed", "2", "--out", "h2.exr"],
+        &[
+            "render",
+            "--rays",
+            "4",
+            "--method",
+            "irradiance",
+            "--out",
+            "e.exr",
+        ],
+        &["render", "--rays", "4", "--shard", "0/2", "--out", "part0.exr"],
+        &["render", "--rays", "4", "--shard", "1/2", "--out", "part1.exr"],
+        &["photons", "build", "--photons", "2000", "--out", "m.map"],
+        &["scene", "export", "s.toml", "x.obj"],
+    ];
+    for args in setup {
+        let mut args = args.to_vec();
+        if args[0] != "scene" {
+            args.extend(tiny);
+        }
+        hmdist_ok(dir.path(), &args);
+    }
+    dir.write("p.csv", "0 0 0 0 1 0\n1 0 1 0 1 0\n");
+
+    // Each command with its outputs as placeholders (@out, @png, @json, @diff, @csv, @obj).
+    let cases: [(&[&str], &[&str]); 10] = [
+        (
+            &[
+                "render", "--rays", "4", "--out", "@out", "--png", "@png", "--json", "@json",
+            ],
+            &["@out", "@png", "@json"],
+        ),
+        (
+            &[
+                "render",
+                "--rays",
+                "4",
+                "--aov",
+                "rays",
+                "--png-aov",
+                "rays",
+                "@diff",
+                "--out",
+                "@out",
+            ],
+            &["@diff"],
+        ),
+        (
+            &[
+                "render",
+                "--method",
+                "photon2",
+                "--photons",
+                "2000",
+                "--photon-map",
+                "m.map",
+                "--out",
+                "@out",
+                "--json",
+                "@json",
+            ],
+            &["@out", "@json"],
+        ),
+        (
+            &[
+                "cache",
+                "--rays",
+                "4",
+                "--spacing",
+                "oracle",
+                "--oracle",
+                "h.exr",
+                "--reference",
+                "e.exr",
+                "--out",
+                "@out",
+                "--png",
+                "@png",
+                "--json",
+                "@json",
+                "--diff-png",
+                "@diff",
+            ],
+            &["@out", "@png", "@json", "@diff"],
+        ),
+        (
+            &[
+                "cache",
+                "--rays",
+                "4",
+                "--spacing",
+                "hmd:photon2:photons=2000,photon_map=m.map",
+                "--out",
+                "@out",
+                "--json",
+                "@json",
+            ],
+            &["@out", "@json"],
+        ),
+        (&["points", "--rays", "4", "p.csv", "@csv"], &["@csv"]),
+        (&["scene", "export", "s.toml", "@obj"], &["@obj"]),
+        (
+            &["photons", "build", "--photons", "2000", "--out", "@out"],
+            &["@out"],
+        ),
+        (
+            &[
+                "merge",
+                "@out",
+                "part0.exr",
+                "part1.exr",
+                "--png",
+                "@png",
+                "--json",
+                "@json",
+            ],
+            &["@out", "@png", "@json"],
+        ),
+        (&["diff", "h.exr", "h2.exr", "--png", "@diff"], &["@diff"]),
+    ];
+    fn fresh(token: &str) -> &str {
+        match token {
+            "@out" => "new.exr",
+            "@png" => "new.png",
+            "@json" => "new.json",
+            "@diff" => "new-diff.png",
+            "@csv" => "new.csv",
+            "@obj" => "new.obj",
+            other => other,
+        }
+    }
+    let with_scene = |args: &[&str]| -> Vec<String> {
+        let mut args: Vec<String> = args.iter().map(|s| s.to_string()).collect();
+        let scene = ["--quiet", "--scene", "s.toml", "--size", "8x8"].map(String::from);
+        match args[0].as_str() {
+            "merge" | "diff" | "scene" => {}
+            "points" => drop(args.splice(1..1, scene[..3].iter().cloned())),
+            "photons" => drop(args.splice(2..2, scene)),
+            _ => drop(args.splice(1..1, scene)),
+        }
+        args
+    };
+    let log = dir.join("reads.log");
+    let mut refusals = 0;
+    for (template, outputs) in cases {
+        let args = with_scene(template);
+        let name = args[..2].join(" ");
+        // The files the command reads, as it reads them.
+        let _ = std::fs::remove_file(&log);
+        let run: Vec<&str> = args.iter().map(|a| fresh(a)).collect();
+        let out = Command::new(env!("CARGO_BIN_EXE_hmdist"))
+            .args(&run)
+            .current_dir(dir.path())
+            .env("HMDIST_READS", &log)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{run:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let mut reads: Vec<String> = std::fs::read_to_string(&log)
+            .unwrap_or_default()
+            .lines()
+            .map(String::from)
+            .collect();
+        reads.sort();
+        reads.dedup();
+        if args.iter().any(|a| a == "s.toml") {
+            for mesh in ["s.toml", "floor.obj", "box.ply"] {
+                assert!(
+                    reads.iter().any(|r| r.ends_with(mesh)),
+                    "{name}: {mesh} not among the reads {reads:?}"
+                );
+            }
+        }
+        assert!(!reads.is_empty(), "{name} reads nothing?");
+        // Each of them as each output.
+        for read in &reads {
+            let before = std::fs::read(dir.path().join(read)).unwrap();
+            for output in outputs {
+                let run: Vec<&str> = args
+                    .iter()
+                    .map(|a| if a == output { read.as_str() } else { fresh(a) })
+                    .collect();
+                let out = hmdist(dir.path(), &run);
+                let stderr = String::from_utf8_lossy(&out.stderr);
+                assert_eq!(out.status.code(), Some(2), "{run:?}: {stderr}");
+                assert!(stderr.contains("would overwrite it"), "{run:?}: {stderr}");
+                assert_eq!(
+                    std::fs::read(dir.path().join(read)).unwrap(),
+                    before,
+                    "{run:?}: {read} changed"
+                );
+                refusals += 1;
+            }
+        }
+    }
+    assert!(refusals >= 60, "{refusals} refusals");
 }
 
 #[test]

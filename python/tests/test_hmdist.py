@@ -134,6 +134,36 @@ def test_cache_and_irradiance_refuse_what_the_cli_refuses() -> None:
         s.irradiance(size=(4, 4), rays=4, denoise=True)
 
 
+def test_a_dark_reference_is_an_answer_and_vectors_too_long_for_float32_squared_are_unit(tmp_path: Path) -> None:
+    # E = 0 everywhere (the light faces away from all the camera sees) is a valid reference.
+    (tmp_path / "floor.obj").write_text("v -5 0 -5\nv 5 0 -5\nv 5 0 5\nv -5 0 5\nv 5 5 -5\nv -5 5 -5\n"
+                                        "f 1 2 3\nf 1 3 4\nf 1 2 5\nf 1 5 6\n")  # a floor and a wall
+    scene = ("[[mesh]]\npath = \"floor.obj\"\n[camera]\neye = [0, 3, 3]\ntarget = [0, 0, 0]\nfov_y_deg = 60\n"
+             "[light]\nposition = {}\ndirection = {}\ncone_half_angle_deg = 30\n")
+    (tmp_path / "dark.toml").write_text(scene.format("[0, -1, 0]", "[0, -1, 0]"))
+    dark = hmdist.Scene.load(tmp_path / "dark.toml")
+    E, _ = dark.irradiance(size=(8, 8), rays=4)
+    assert np.all(E[np.isfinite(E)] == 0)
+    _, report, _ = dark.cache(size=(8, 8), rays=4, reference=E)
+    assert report["reference"]["mean_relative_error"] == 0.0
+    # A light direction whose square overflows float32 is the unit one, not zero.
+    (tmp_path / "far.toml").write_text(scene.format("[0, 1, 0]", "[0, -3e19, -3e19]"))
+    (tmp_path / "unit.toml").write_text(scene.format("[0, 1, 0]", "[0, -1, -1]"))
+    far, _ = hmdist.Scene.load(tmp_path / "far.toml").irradiance(size=(8, 8), rays=64)
+    unit, _ = hmdist.Scene.load(tmp_path / "unit.toml").irradiance(size=(8, 8), rays=64)
+    assert np.nanmax(unit) > 0 and np.array_equal(far, unit, equal_nan=True)
+    # Four numbers are not a position.
+    (tmp_path / "four.toml").write_text(scene.format("[0, 1, 0, 123]", "[0, -1, 0]"))
+    with pytest.raises(OSError, match=r"four.toml:8: expected exactly three numbers \[x, y, z\], found 4"):
+        hmdist.Scene.load(tmp_path / "four.toml")
+    # A normal of length 1e30 at a point gives the unit normal's H.
+    s = hmdist.Scene.builtin("cube")
+    p = np.array([[0.0, 0.5, 0.0]])
+    h = s.hmd_at(p, np.array([[0.0, 1.0, 0.0]]), rays=64)
+    huge = s.hmd_at(p, np.array([[0.0, 1e30, 0.0]]), rays=64)
+    assert np.array_equal(h, huge)
+
+
 def test_hmd_at_on_an_images_own_hits_keyed_by_pixel_equals_the_image() -> None:
     s = hmdist.Scene.builtin("cube")
     cam = hmdist.Camera((0.3, 4.3, 4.7), (0.0, 1.6, -1.6), fov_y_deg=60, size=(32, 24))
@@ -243,7 +273,7 @@ def ctrl_c_raises() -> Iterator[None]:
     signal.signal(signal.SIGINT, previous)
 
 
-@pytest.mark.parametrize("call", ["render", "hmd_at", "cast"])
+@pytest.mark.parametrize("call", ["render", "hmd_at", "cast", "cache", "irradiance"])
 def test_ctrl_c_stops_the_work_within_a_second_and_the_next_call_works(call: str, ctrl_c_raises: None) -> None:
     s = hmdist.Scene.builtin("cube")
     p = np.array([[0.0, 0.0, 0.0]] * 64)
@@ -254,6 +284,9 @@ def test_ctrl_c_stops_the_work_within_a_second_and_the_next_call_works(call: str
         "render": lambda: s.render(size=(64, 64), rays=1 << 20),
         "hmd_at": lambda: s.hmd_at(p, n, rays=1 << 26),
         "cast": lambda: s.cast(o, d),
+        # One record's or one pixel's rays alone take minutes: the signal is seen inside them.
+        "cache": lambda: s.cache(size=(8, 8), rays=1 << 26),
+        "irradiance": lambda: s.irradiance(size=(8, 8), rays=1 << 26),
     }[call]
     s.cast(o[:1], d[:1])  # the BVH is built before the clock starts
     start = time.monotonic()

@@ -223,13 +223,21 @@ fn image_of(
     let sidecar = path.with_extension("json");
     if sidecar.is_file() {
         let report = RenderReport::read(&sidecar).map_err(|e| {
-            let message =
-                format!(
-                "{}'s sidecar {} is not the report of a render ({}): give the image `hmdist render` wrote{}",
+            let what = if made_by_cache(&sidecar) {
+                "is the report of `hmdist cache`: a cache's image is what is measured, not a reference"
+                    .to_string()
+            } else {
+                format!("is not the report of a render ({})", e.describe(|n| n.into()))
+            };
+            let message = format!(
+                "{}'s sidecar {} {what}: give the image `hmdist render` wrote{}",
                 path.display(),
                 sidecar.display(),
-                e.describe(|n| n.into()),
-                if flag == "reference" { " with --method irradiance" } else { "" }
+                if flag == "reference" {
+                    " with --method irradiance"
+                } else {
+                    ""
+                }
             );
             Error::invalid(flag, message)
         })?;
@@ -305,6 +313,13 @@ fn not_the_same_pixels(report: &RenderReport, scene: &Scene, args: &CacheArgs, o
 }
 
 /// `value` as JSON text, to compare report parts that have no `PartialEq`.
+/// Whether the JSON file at `path` is a cache's report (`"method": "cache"`).
+fn made_by_cache(path: &Path) -> bool {
+    let text = hmdist::files::read_text(path).unwrap_or_default();
+    let value: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
+    value["method"] == "cache"
+}
+
 fn json(value: &impl serde::Serialize) -> String {
     serde_json::to_string(value).expect("a report part serialises")
 }

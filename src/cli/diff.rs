@@ -87,11 +87,19 @@ pub fn run(args: DiffArgs) -> Result<ExitCode> {
 /// `l_diag` and the display scale from the JSON that `hmdist render` wrote beside `exr`.
 fn from_sidecar(exr: &Path) -> Result<(f32, f32)> {
     let json = exr.with_extension("json");
-    let text = std::fs::read_to_string(&json).map_err(|e| {
-        Error::file(
-            &json,
-            format!("cannot read the sidecar for l_diag ({e}): pass --scene"),
-        )
+    let text = hmdist::files::read_text(&json).map_err(|e| match e {
+        Error::File {
+            path,
+            line,
+            message,
+            source,
+        } => Error::File {
+            path,
+            line,
+            message: format!("{message} (the sidecar that gives l_diag): pass --scene"),
+            source,
+        },
+        other => other,
     })?;
     /// The two keys of the report that `diff` reads.
     #[derive(serde::Deserialize)]

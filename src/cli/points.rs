@@ -74,11 +74,12 @@ pub fn run(args: PointsArgs) -> Result<()> {
         args.max_distance,
     )?;
     PointFormat::of(&args.input)?;
-    PointFormat::of(&args.output)?;
     let mut inputs = Scene::files_read(&args.scene);
     inputs.push(args.input.clone());
     let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
     let outputs = OutputSet::reserve(&[&args.output], &inputs)?;
+    // After the reservation: an output that is an input is the first thing to say.
+    PointFormat::of(&args.output)?;
     let bar = Bar::new(args.quiet);
     bar.status("reading");
     let rows = read_rows(&args.input)?;

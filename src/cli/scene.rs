@@ -54,6 +54,11 @@ pub fn run(command: SceneCommand) -> Result<()> {
             Ok(())
         }
         SceneCommand::Export { scene, out } => {
+            // Not over the scene's own files: an export there would replace them.
+            let inputs = Scene::files_read(&scene);
+            let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
+            hmdist::files::check_output(&out, &inputs)?;
+            hmdist::files::check_extension(&out, "obj")?;
             let scene = Scene::load(&scene)?;
             export::write_obj(&scene.mesh, &out)?;
             println!("{} triangles -> {}", scene.mesh.triangle_count(), out.display());

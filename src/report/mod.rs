@@ -152,7 +152,7 @@ impl RenderReport {
     /// image's): the one place a report is read back, so every reader refuses the same way.
     pub fn read(path: &std::path::Path) -> crate::error::Result<RenderReport> {
         use crate::error::Error;
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, "read", e))?;
+        let text = crate::files::read_text(path)?;
         /// A report as a file holds it: one written before the parameters were an object
         /// has them at the top level.
         #[derive(Deserialize)]

@@ -17,8 +17,8 @@ use super::{
     AovSample, EstimateContext, Estimator, GBuffer, HarmonicMean, PixelJob, PixelPass, PixelWorker, Prepared,
     RayCount, Tally,
 };
+use crate::accel::Accel;
 use crate::accel::Hit;
-use crate::accel::{Accel, BuildQuality};
 use crate::error::{Error, Result};
 use crate::options::{in_pool, RenderOptions};
 use crate::progress::Progress;
@@ -183,12 +183,15 @@ impl PhotonEstimator {
 }
 
 impl PhotonEstimator {
-    /// The fingerprint of this estimator's map for `scene` with `seed`, traced through BVH
-    /// preset `bvh` (resolved), for images of `size` (which camera-sourced photons depend on):
-    /// the [`RenderKey::digest`] of the map's key, the render key with what the map depends on
-    /// (the scene's content, not its name; the photon method, count, source, bounces and
-    /// absorption, not K; the size only for camera-sourced photons).
-    pub fn map_fingerprint(&self, scene: &Scene, seed: u64, size: (u32, u32), bvh: BuildQuality) -> u64 {
+    /// The fingerprint of this estimator's map for `scene` with `seed`, for images of `size`
+    /// (which camera-sourced photons depend on): the [`RenderKey::digest`] of the map's key,
+    /// the render key with what the map depends on (the scene's content, not its name; the
+    /// photon method, count, source, bounces and absorption, not K; the size only for
+    /// camera-sourced photons). Not the BVH preset: the tie rule gives every photon the same
+    /// hit through either tree, so the map is the same bytes (tests/photon.rs), and a map
+    /// built by `photons build` serves a render or a cache whose work resolves `auto` to the
+    /// other preset.
+    pub fn map_fingerprint(&self, scene: &Scene, seed: u64, size: (u32, u32)) -> u64 {
         /// The photon parameters a map depends on.
         #[derive(serde::Serialize)]
         struct MapParameters {
@@ -219,7 +222,7 @@ impl PhotonEstimator {
             ),
             backend: "cpu".into(),
             adapter_class: None,
-            bvh: bvh.name().into(),
+            bvh: "any".into(),
             width,
             height,
             seed,
@@ -245,10 +248,10 @@ impl PhotonEstimator {
             let pixels = options.width as u64 * options.height as u64;
             let rays = pixels + self.expected_rays(pixels);
             let kernel = options.kernel;
-            let (accel, bvh) = Accel::for_work(&scene.mesh, options.bvh_quality, rays, kernel)?;
+            let (accel, _) = Accel::for_work(&scene.mesh, options.bvh_quality, rays, kernel)?;
             let source = self.source_for(scene, (options.width, options.height))?;
             let (map, header, _) = self.trace_and_index(&accel, &source, options.seed, progress)?;
-            let fingerprint = self.map_fingerprint(scene, options.seed, (options.width, options.height), bvh);
+            let fingerprint = self.map_fingerprint(scene, options.seed, (options.width, options.height));
             Ok(map.to_bytes(&MapHeader {
                 fingerprint,
                 ..header
@@ -352,10 +355,10 @@ impl Estimator for PhotonEstimator {
         let (map, header, phases) = match &self.prebuilt {
             Some((map, header)) => {
                 let size = (gbuffer.width, gbuffer.height);
-                let expected = self.map_fingerprint(context.scene, context.seed, size, context.bvh);
+                let expected = self.map_fingerprint(context.scene, context.seed, size);
                 if header.fingerprint != expected {
                     let message = "is not this render's photon map: built for another scene, photon \
-                                   parameters, seed, BVH preset, image size (camera source) or version";
+                                   parameters, seed, image size (camera source) or version";
                     return Err(Error::invalid("photon_map", message));
                 }
                 // Nothing traced or indexed here: the keys stay, at zero seconds.
