@@ -102,16 +102,17 @@ const fn sobol_dim1_slow(i: u32) -> u32 {
     y
 }
 
-/// [`sobol_dim1_slow`] of each byte value at each of the four byte positions, so that the
-/// matrix product is four lookups (the index is a scrambled 32-bit number: a loop over its
-/// bits would branch unpredictably up to 32 times).
-static SOBOL_DIM1_BYTES: [[u32; 256]; 4] = {
+/// [`sobol_dim1_slow`] of each byte value at each of the four byte positions, its bits
+/// reversed (as [`owen_scramble`] wants them), so that the matrix product is four lookups
+/// (the index is a scrambled 32-bit number: a loop over its bits would branch unpredictably
+/// up to 32 times).
+static SOBOL_DIM1_REVERSED_BYTES: [[u32; 256]; 4] = {
     let mut table = [[0u32; 256]; 4];
     let mut position = 0;
     while position < 4 {
         let mut byte = 0;
         while byte < 256 {
-            table[position][byte] = sobol_dim1_slow((byte as u32) << (8 * position));
+            table[position][byte] = sobol_dim1_slow((byte as u32) << (8 * position)).reverse_bits();
             byte += 1;
         }
         position += 1;
@@ -119,16 +120,16 @@ static SOBOL_DIM1_BYTES: [[u32; 256]; 4] = {
     table
 };
 
-/// The first two dimensions of the Sobol sequence at index `i`, as binary fractions: the van
-/// der Corput sequence, and the dimension whose generator matrix is Pascal's triangle mod 2.
+/// The second dimension of the Sobol sequence at index `i` (the one whose generator matrix
+/// is Pascal's triangle mod 2), its bits reversed. (The first is the van der Corput
+/// sequence, `i` reversed.)
 #[inline(always)]
-fn sobol_pair(i: u32) -> (u32, u32) {
-    let t = &SOBOL_DIM1_BYTES;
-    let y = t[0][(i & 0xff) as usize]
+fn sobol_dim1_reversed(i: u32) -> u32 {
+    let t = &SOBOL_DIM1_REVERSED_BYTES;
+    t[0][(i & 0xff) as usize]
         ^ t[1][((i >> 8) & 0xff) as usize]
         ^ t[2][((i >> 16) & 0xff) as usize]
-        ^ t[3][(i >> 24) as usize];
-    (i.reverse_bits(), y)
+        ^ t[3][(i >> 24) as usize]
 }
 
 /// One scrambled progressive sequence of points in the unit square: Owen-scrambled Sobol
@@ -157,13 +158,16 @@ impl Progressive {
         }
     }
 
-    /// Point `j` as binary fractions (bit 31 first).
+    /// Point `j` as binary fractions (bit 31 first): Sobol point `i` = the scrambled `j`,
+    /// each coordinate Owen-scrambled. The scramble reverses its input's bits, which undoes
+    /// the van der Corput reversal and the reversed table's, so four reversals are left of
+    /// seven (`cube` 64² × 256: about 13 instructions a ray fewer, of some 130).
     #[inline(always)]
     pub fn bits(&self, j: u32) -> (u32, u32) {
-        let (x, y) = sobol_pair(owen_scramble(j, self.shuffle));
+        let i = owen_scramble(j, self.shuffle);
         (
-            owen_scramble(x, self.scramble.0),
-            owen_scramble(y, self.scramble.1),
+            laine_karras(i, self.scramble.0).reverse_bits(),
+            laine_karras(sobol_dim1_reversed(i), self.scramble.1).reverse_bits(),
         )
     }
 
@@ -485,7 +489,30 @@ mod tests {
     #[test]
     fn the_sobol_tables_are_the_generator_matrix() {
         for i in (0..1u32 << 16).chain([u32::MAX, 0x8000_0001, 0xdead_beef, 0x1234_5678]) {
-            assert_eq!(sobol_pair(i).1, sobol_dim1_slow(i), "{i:#x}");
+            assert_eq!(
+                sobol_dim1_reversed(i).reverse_bits(),
+                sobol_dim1_slow(i),
+                "{i:#x}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_point_is_the_owen_scrambled_sobol_point_of_the_scrambled_index() {
+        // The definition, written out with every reversal (as it was computed until
+        // 2026-12-07): the points, and so every sobol image, are unchanged.
+        let definition = |p: &Progressive, j: u32| {
+            let i = owen_scramble(j, p.shuffle);
+            (
+                owen_scramble(i.reverse_bits(), p.scramble.0),
+                owen_scramble(sobol_dim1_slow(i), p.scramble.1),
+            )
+        };
+        for key in 0..20u64 {
+            let p = Progressive::new(Stream::new(7, key), key as u32 % 3);
+            for j in (0..4_096).chain([65_535, 1 << 20, u32::MAX]) {
+                assert_eq!(p.bits(j), definition(&p, j), "key {key}, point {j}");
+            }
         }
     }
 

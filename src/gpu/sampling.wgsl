@@ -99,8 +99,9 @@ fn owen_scramble(x: u32, seed: u32) -> u32 {
     return reverseBits(laine_karras(reverseBits(x), seed));
 }
 
-// sampling::sobol_pair: the first two Sobol dimensions at index i, as binary fractions (the
-// second's generator matrix bit by bit: Pascal's triangle mod 2).
+// The first two Sobol dimensions at index i, as binary fractions: the van der Corput sequence
+// and, bit by bit, the dimension whose generator matrix is Pascal's triangle mod 2 (the CPU's
+// sampling::Progressive::bits computes the same point with its bit reversals folded together).
 fn sobol_pair(i: u32) -> vec2<u32> {
     var y = 0u;
     var v = 0x80000000u;

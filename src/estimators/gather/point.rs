@@ -122,8 +122,18 @@ impl PointGather {
         // and cast as they are, without `local`.
         let blocks = (self.sampler == Sampler::Grid && grouping.blocks)
             .then(|| GridBlocks::new(self.weighting, (seed, key), self.rounds, n, start.frame));
-        let local_len = if blocks.is_some() { 0 } else { span };
+        let local_len = if blocks.is_some() || net.is_some() {
+            0
+        } else {
+            span
+        };
         let (mut distances, mut local) = (vec![0.0f32; span], vec![Vec3::ZERO; local_len]);
+        // A net's points of the unit square, made into directions eight at a time.
+        let mut points = vec![glam::Vec2::ZERO; if net.is_some() { span } else { 0 }];
+        let net_packets = NetPackets {
+            weighting: self.weighting,
+            frame: start.frame,
+        };
         // The rays' local z (cos θ), for the AO weights.
         let mut cos_theta = vec![0.0f32; span];
         let (origins, leaving) = ([start.origin; PACKET], [start.leaving; PACKET]);
@@ -160,19 +170,24 @@ impl PointGather {
                         cos_theta[j] = z[q];
                     }
                 }
+            } else if let Some(sequence) = &net {
+                let order = net_order(sequence, (part.first, n), &mut points);
+                for rays in order.chunks(PACKET) {
+                    let (world, z) = net_packets.packet(&points, rays);
+                    lanes.direction = world;
+                    let mut t = [0.0f32; PACKET];
+                    accel.hit_distances_of_lanes(&lanes, PACKET, start.leaving, clamp.max, &mut t);
+                    for (q, &j) in rays.iter().enumerate() {
+                        distances[j as usize] = t[q];
+                        cos_theta[j as usize] = z[q];
+                    }
+                }
             } else {
-                if let Some(sequence) = &net {
-                    let order = net_order(sequence, self.weighting, (part.first, n), &mut local);
-                    for rays in order.chunks(PACKET) {
-                        cast(rays, 0, &local, &mut distances);
-                    }
-                } else {
-                    for (w, next) in local[..count].iter_mut().zip(&mut directions) {
-                        *w = next;
-                    }
-                    for packet in grouping.within(base, count as u32) {
-                        cast(packet.rays(), base, &local, &mut distances);
-                    }
+                for (w, next) in local[..count].iter_mut().zip(&mut directions) {
+                    *w = next;
+                }
+                for packet in grouping.within(base, count as u32) {
+                    cast(packet.rays(), base, &local, &mut distances);
                 }
                 for (z, w) in cos_theta[..count].iter_mut().zip(&local[..count]) {
                     *z = w.z;
