@@ -29,8 +29,8 @@
 //!
 //! ## Example
 //!
-//! Inside a closed sphere of radius R, every point has H = R under cosine weighting (SPEC
-//! §1), so the mean of R/H over an image is 1:
+//! Inside a closed sphere of radius R, every point has H = R under cosine weighting
+//! (spec §1), so the mean of R/H over an image is 1:
 //!
 //! ```
 //! use hmdist::estimators::Gather;

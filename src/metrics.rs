@@ -1,4 +1,4 @@
-//! Accuracy metrics between two HMD images (SPEC §4, paper eq. 3).
+//! Accuracy metrics between two HMD images (spec §4, paper eq. 3).
 //!
 //! `f_diff = (Σ_i |H_ref(i) − H(i)| / N_pixels) · 100 / l_diag` over the pixels finite in both
 //! images; background pixels, holes and `+inf` pixels are excluded and counted.
@@ -55,7 +55,7 @@ pub fn f_diff(reference: &HmdImage, test: &HmdImage, l_diag: f32) -> Result<FDif
 /// Every figure `hmdist diff` prints, over the pixels finite in both images.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Comparison {
-    /// `f_diff` (SPEC §4) and the pixels it was computed over.
+    /// `f_diff` (spec §4) and the pixels it was computed over.
     pub f_diff: FDiff,
     /// Root mean square of `H − H_ref`, in scene units.
     pub rmse: f64,
@@ -80,7 +80,7 @@ pub struct Comparison {
 /// The fraction of the compared pixels (by smallest `H_ref`) that [`Comparison`] calls creases.
 pub const CREASE_FRACTION: f64 = 0.1;
 
-/// `f_diff` (SPEC §4) and the other figures of [`Comparison`].
+/// `f_diff` (spec §4) and the other figures of [`Comparison`].
 pub fn compare(reference: &HmdImage, test: &HmdImage, l_diag: f32) -> Result<Comparison> {
     let f_diff = f_diff(reference, test, l_diag)?;
     let (mut squares, mut relative, mut relative_count) = (0.0f64, 0.0f64, 0usize);
@@ -148,7 +148,7 @@ fn percentile(sorted: &[f64], q: f64) -> f64 {
     sorted[rank - 1]
 }
 
-/// The difference picture of SPEC §4: grey `1 − clamp(10 · s · |ΔH|)`, white where equal;
+/// The difference picture of spec §4: grey `1 − clamp(10 · s · |ΔH|)`, white where equal;
 /// pixels not finite in both images are black.
 pub fn difference_picture(reference: &HmdImage, test: &HmdImage, scale: f32) -> image::GrayImage {
     image::GrayImage::from_fn(reference.width, reference.height, |x, y| {

@@ -9,7 +9,7 @@ use crate::accel::{BuildQuality, Kernel};
 pub use crate::denoise::DenoiseParams;
 use crate::error::{Error, Result};
 
-/// One AOV: a per-pixel companion of H, written as an EXR channel beside `Y` (SPEC §8;
+/// One AOV: a per-pixel companion of H, written as an EXR channel beside `Y` (spec §8;
 /// [`crate::estimators::aov`] measures them).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
@@ -66,7 +66,7 @@ impl Aov {
     }
 }
 
-/// Default image size (SPEC §2).
+/// Default image size (spec §2).
 pub const DEFAULT_SIZE: (u32, u32) = (1024, 1024);
 /// Default seed of the counter-based random numbers.
 pub const DEFAULT_SEED: u64 = 1;
@@ -93,7 +93,7 @@ pub struct RenderOptions {
     /// The library never reads `HMDIST_KERNEL`: the CLI and Python read it, with
     /// [`Kernel::from_env`], and set this.
     pub kernel: Kernel,
-    /// AOVs to measure beside H, each an EXR channel (SPEC §8).
+    /// AOVs to measure beside H, each an EXR channel (spec §8).
     pub aovs: Vec<Aov>,
     /// Render only this shard's rows ([`crate::shard`]); `None` for the whole image.
     pub shard: Option<Shard>,
@@ -120,6 +120,18 @@ impl Default for RenderOptions {
 }
 
 impl RenderOptions {
+    /// What a [`crate::report::RenderKey`] holds of the image these options render.
+    pub fn key_image(&self) -> crate::report::KeyImage {
+        crate::report::KeyImage {
+            width: self.width,
+            height: self.height,
+            seed: self.seed,
+            max_distance: self.max_distance,
+            aovs: self.aovs.iter().map(|a| a.name().into()).collect(),
+            denoise: self.denoise,
+        }
+    }
+
     /// Refuses an empty or oversized image, a non-positive `max_distance`, bad denoising
     /// parameters, and zero threads or more than [`max_threads`].
     pub fn validate(&self) -> Result<()> {

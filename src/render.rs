@@ -1,4 +1,4 @@
-//! The render driver: scene → BVH → primary hits → estimator → image and report (SPEC §2, §7).
+//! The render driver: scene → BVH → primary hits → estimator → image and report (spec §2, §7).
 //!
 //! It owns the loops over pixels: primary rays, then the estimator's pixels, rows in
 //! parallel, with progress, ray and hole counts and timings; an estimator implements one
@@ -28,7 +28,7 @@ use crate::report::{BoundsReport, CameraReport, LightReport, RenderReport, Secon
 use crate::report::{Details, RenderKey, ShardReport};
 use crate::scene::{Bounds, Scene};
 
-/// An HMD image and its report (SPEC §7).
+/// An HMD image and its report (spec §7).
 pub struct Rendered {
     /// H per pixel.
     pub image: HmdImage,
@@ -410,7 +410,7 @@ fn output(
             .map(|(s, content)| ShardReport {
                 index: s.index,
                 count: s.count,
-                fingerprint: fingerprint(scene, content, estimator, options),
+                legacy_fingerprint: legacy_fingerprint(scene, content, estimator, options),
                 key: Some(render_key(
                     scene,
                     content,
@@ -441,14 +441,15 @@ fn output(
     }
 }
 
-/// The fingerprint shard reports have carried since shards began: a hash of the scene (name
+/// The fingerprint shard reports carried before they carried a [`RenderKey`] (still
+/// written, for `merge` to read beside old parts): a hash of the scene (name
 /// and content), the method and its parameters, size, seed, distance clamp, AOVs and version.
 /// It holds fewer fields than the [`RenderKey`] and keeps its first form, so that `merge` can
 /// still join a part written before keys existed (which it compares by fingerprint) with
 /// parts written after: an experiment's image rendered in parts over several sessions may
 /// have both.
 /// `scene_content` is [`Scene::fingerprint`].
-fn fingerprint(
+fn legacy_fingerprint(
     scene: &Scene,
     scene_content: u64,
     estimator: &dyn Estimator,
@@ -484,26 +485,20 @@ fn render_key(
     details: &Details,
 ) -> RenderKey {
     let device = details.device.as_ref();
-    RenderKey {
-        hmdist_version: env!("CARGO_PKG_VERSION").into(),
-        scene: scene.name.clone(),
-        scene_content: format!("{scene_content:016x}"),
-        method: estimator.method().into(),
-        parameters: estimator.parameters(),
-        backend: device.map_or("cpu".into(), |d| d.backend.clone()),
-        adapter_class: device.and_then(|d| d.adapter_class.clone()),
-        bvh: bvh.name().into(),
-        width: options.width,
-        height: options.height,
-        seed: options.seed,
-        max_distance: options.max_distance,
-        aovs: options.aovs.iter().map(|a| a.name().into()).collect(),
-        ao_radius: details.ao_radius,
-        denoise: options.denoise,
-    }
+    RenderKey::new(
+        (&scene.name, scene_content),
+        (estimator.method(), estimator.parameters()),
+        bvh.name(),
+        options.key_image(),
+    )
+    .on(
+        device.map_or("cpu", |d| d.backend.as_str()),
+        device.and_then(|d| d.adapter_class.clone()),
+    )
+    .with_ao_radius(details.ao_radius)
 }
 
-/// Each pixel's first hit along its camera ray (SPEC §2), normal flipped to face the camera.
+/// Each pixel's first hit along its camera ray (spec §2), normal flipped to face the camera.
 pub fn primary_hits(accel: &impl RayCaster, scene: &Scene, width: u32, height: u32) -> GBuffer {
     primary_hits_where(accel, scene, width, height, |_| true)
 }

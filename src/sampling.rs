@@ -1,4 +1,4 @@
-//! Random numbers and hemisphere sampling (SPEC §2 determinism, §3.1 stratification).
+//! Random numbers and hemisphere sampling (spec §2 determinism, §3.1 stratification).
 //!
 //! Random numbers are a pure function of (seed, stream, counter): a pixel's gather rays use
 //! stream = pixel index and counter = sample index, a photon path uses stream = path index.
@@ -8,7 +8,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
-/// The direction weighting of SPEC §1.
+/// The direction weighting of spec §1.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
@@ -30,15 +30,15 @@ impl Weighting {
     }
 }
 
-/// How a point's gather directions fill the unit square: the jittered grid of SPEC §3.1, or
+/// How a point's gather directions fill the unit square: the jittered grid of spec §3.1, or
 /// a progressive sequence whose every prefix of `2^k` rays is stratified. The default is
 /// Sobol, which gives 14–29 % lower f_diff than the grid at equal N on `cube` and `hall`
-/// (docs/benchmarks.md); the paper's experiments name the grid, SPEC §3.1's sampling.
+/// (docs/benchmarks.md); the paper's experiments name the grid, spec §3.1's sampling.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Sampler {
-    /// A jittered `a × b` grid of all N rays (SPEC §3.1): one ray per stratum.
+    /// A jittered `a × b` grid of all N rays (docs/spec.md §3.1): one ray per stratum.
     Grid,
     /// Owen-scrambled Sobol (0,2) points: every prefix of `2^k` rays has one ray in each
     /// elementary box of area `2^-k` (each `2^a × 2^b` grid with `a + b = k`), for any N.

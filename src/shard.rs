@@ -294,17 +294,17 @@ fn not_one_render(a: &ShardReport, b: &ShardReport) -> Option<String> {
     }
     let differences = match (&a.key, &b.key) {
         // The fingerprint is compared too: it goes into the merged report.
-        (Some(ka), Some(kb)) if a.fingerprint == b.fingerprint => ka.differences(kb),
+        (Some(ka), Some(kb)) if a.legacy_fingerprint == b.legacy_fingerprint => ka.differences(kb),
         (Some(ka), Some(kb)) if ka == kb => vec![format!(
             "fingerprint ({} against {}), though their keys agree: a report was edited",
-            a.fingerprint, b.fingerprint
+            a.legacy_fingerprint, b.legacy_fingerprint
         )],
         (Some(ka), Some(kb)) => ka.differences(kb),
-        _ if a.fingerprint == b.fingerprint => vec![],
+        _ if a.legacy_fingerprint == b.legacy_fingerprint => vec![],
         _ => vec![format!(
             "fingerprint ({} against {}: scene, camera, method, parameters, size, seed, clamp, AOVs or \
              version)",
-            a.fingerprint, b.fingerprint
+            a.legacy_fingerprint, b.legacy_fingerprint
         )],
     };
     (!differences.is_empty()).then(|| {

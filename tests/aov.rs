@@ -1,4 +1,4 @@
-//! AOVs, error bars and adaptive gathering (SPEC §8): closed forms on the sphere and the
+//! AOVs, error bars and adaptive gathering (spec §8): closed forms on the sphere and the
 //! slab, error bars against the spread over seeds, adaptive's determinism and ray budget.
 
 mod common;
@@ -177,7 +177,7 @@ fn error_bar_against_spread(label: &str, method: &str, config: impl serde::Seria
             .collect();
         let predicted = sigma.iter().sum::<f64>() / seeds as f64;
         // Near a crease some ray meets a surface very close: 1/d is heavy-tailed there
-        // (SPEC §1), and rare very short distances make the spread larger than 8 rounds show.
+        // (spec §1), and rare very short distances make the spread larger than 8 rounds show.
         let near_crease = runs
             .iter()
             .any(|r| channel(r, Aov::Dmin)[i] < 0.05 * r.image.data[i]);

@@ -1,5 +1,5 @@
 //! The `hmdist` command end to end: bad input exits 2 with a message and leaves no file;
-//! TOML scenes follow the camera convention of SPEC §2 exactly.
+//! TOML scenes follow the camera convention of spec §2 exactly.
 
 mod common;
 
@@ -34,7 +34,7 @@ fn flags_that_cannot_work_are_refused_before_anything_is_made() {
         &render_args(&["--threads", "1000"]),
         "--threads 1000 is more than 4 per CPU",
     );
-    // A flag nothing reads is refused by name (SPEC §8): the AO radius without the ao AOV.
+    // A flag nothing reads is refused by name (spec §8): the AO radius without the ao AOV.
     refuses(
         "ao-radius-unread",
         &[],
@@ -747,7 +747,7 @@ fn a_file_the_gltf_crate_panics_on_gives_our_one_line_error_only() {
     assert!(stderr.starts_with("hmdist: error: "), "{stderr}");
 }
 
-/// SPEC §2's ray direction for pixel (px, py), computed here in f64, independently of hmdist.
+/// spec §2's ray direction for pixel (px, py), computed here in f64, independently of hmdist.
 fn spec_direction(
     eye: DVec3,
     target: DVec3,
@@ -768,7 +768,7 @@ fn spec_direction(
 
 #[test]
 fn toml_scene_follows_the_spec_camera_convention_pixel_for_pixel() {
-    // A huge tilted plane: a pixel sees it exactly when its SPEC §2 ray heads towards it, so
+    // A huge tilted plane: a pixel sees it exactly when its spec §2 ray heads towards it, so
     // the boundary between hit and background pixels is a slanted line that moves if the
     // camera's orientation, handedness, aspect or pixel centres differ in the least.
     let dir = Scratch::new("camera");
@@ -855,7 +855,7 @@ fn render_writes_exr_png_and_json_with_the_spec_keys() {
     assert_eq!(
         channels,
         [("Y".to_string(), exr::meta::attribute::SampleType::F32)],
-        "SPEC §7: one float32 channel named Y"
+        "spec §7: one float32 channel named Y"
     );
     let report = read_json(&dir.join("hmd.json"));
     for key in [

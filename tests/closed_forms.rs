@@ -1,4 +1,4 @@
-//! Final gathering against the closed-form answers of SPEC §1.
+//! Final gathering against the closed-form answers of spec §1.
 
 mod common;
 
@@ -11,7 +11,7 @@ use hmdist::scene::procedural::validation;
 
 #[test]
 fn inside_a_closed_sphere_cosine_gather_is_unbiased() {
-    // SPEC §1: 1/H is unbiased for 1/R, so test the mean of R/H over pixels and the median of
+    // spec §1: 1/H is unbiased for 1/R, so test the mean of R/H over pixels and the median of
     // H/R; single pixels scatter widely near the horizon. A fixed-epsilon ray offset fails
     // this (it drops the near-horizon hits and biases H upward by about 2 %).
     let r = validation::SPHERE_RADIUS;

@@ -1,4 +1,4 @@
-//! The cube-map estimator (SPEC §3.2) against closed forms, against final gathering with the
+//! The cube-map estimator (spec §3.2) against closed forms, against final gathering with the
 //! same directions, and GPU against CPU.
 
 mod common;

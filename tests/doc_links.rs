@@ -168,3 +168,169 @@ fn every_link_and_image_of_the_docs_and_the_reports_exists() {
         broken.join("\n")
     );
 }
+
+/// The section numbers of `docs/spec.md`'s headings ("## 3. The estimators": `3`, "### 3.1
+/// …": `3.1`).
+fn spec_sections(root: &Path) -> Vec<String> {
+    let spec = std::fs::read_to_string(root.join("docs/spec.md")).unwrap();
+    spec.lines()
+        .filter(|line| line.starts_with('#'))
+        .filter_map(|line| {
+            let number = line.trim_start_matches('#').trim().split(' ').next()?;
+            let number = number.trim_end_matches('.');
+            (!number.is_empty() && number.chars().all(|c| c.is_ascii_digit() || c == '.'))
+                .then(|| number.to_string())
+        })
+        .collect()
+}
+
+/// The section numbers cited as `spec §N` (or `§N` right after one: "spec §7, §8") in `text`.
+fn spec_citations(text: &str) -> Vec<String> {
+    let mut cited = vec![];
+    for piece in text.replace("spec.md §", "spec §").split("spec §").skip(1) {
+        // "§3.1", "§4's", "§2." at a sentence's end, "§7, §8", "§1–§3".
+        let mut rest = piece;
+        loop {
+            let number: String = rest
+                .chars()
+                .take_while(|c| c.is_ascii_digit() || *c == '.')
+                .collect();
+            // "spec §N", the form itself, names no section.
+            if !number.is_empty() {
+                cited.push(number.trim_end_matches('.').to_string());
+            }
+            rest = &rest[number.len()..];
+            match rest
+                .strip_prefix(", §")
+                .or_else(|| rest.strip_prefix("–§"))
+                .or_else(|| rest.strip_prefix(" and §"))
+            {
+                Some(next) => rest = next,
+                None => break,
+            }
+        }
+    }
+    cited
+}
+
+/// Every tracked text file of the repository (by `git ls-files`), with its text.
+fn tracked_texts(root: &Path) -> Vec<(PathBuf, String)> {
+    let listed = std::process::Command::new("git")
+        .args(["ls-files", "-z"])
+        .current_dir(root)
+        .output()
+        .expect("git lists the repository's files");
+    assert!(listed.status.success(), "git ls-files failed");
+    String::from_utf8(listed.stdout)
+        .unwrap()
+        .split('\0')
+        .filter(|name| !name.is_empty())
+        .filter_map(|name| {
+            let path = root.join(name);
+            let text = String::from_utf8(std::fs::read(&path).ok()?).ok()?;
+            Some((path, text))
+        })
+        .collect()
+}
+
+#[test]
+fn every_spec_section_cited_in_the_repository_and_in_help_exists() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let sections = spec_sections(root);
+    assert!(
+        ["1", "3.1", "3.3", "8"]
+            .iter()
+            .all(|s| sections.contains(&s.to_string())),
+        "the spec's headings were not read: {sections:?}"
+    );
+    assert_eq!(
+        spec_citations("f_diff (spec §4), spec §7, §8 and spec §2."),
+        ["4", "7", "8", "2"]
+    );
+    let mut broken = vec![];
+    let mut cited = 0;
+    for (path, text) in tracked_texts(root) {
+        if path.ends_with("tests/doc_links.rs") {
+            continue; // this file's own examples
+        }
+        for (n, line) in text.lines().enumerate() {
+            for section in spec_citations(line) {
+                cited += 1;
+                if !sections.contains(&section) {
+                    broken.push(format!("{}:{}: spec §{section}", path.display(), n + 1));
+                }
+            }
+        }
+    }
+    // What a user reads in `--help` names the file, so it can be followed.
+    let hmdist = env!("CARGO_BIN_EXE_hmdist");
+    let commands: [&[&str]; 11] = [
+        &[],
+        &["render"],
+        &["diff"],
+        &["merge"],
+        &["points"],
+        &["cache"],
+        &["experiment"],
+        &["photons", "build"],
+        &["scene", "info"],
+        &["scene", "export"],
+        &["gpu", "list"],
+    ];
+    let mut in_help = 0;
+    for command in commands {
+        let out = std::process::Command::new(hmdist)
+            .args(command)
+            .arg("--help")
+            .output()
+            .unwrap();
+        let help = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success() && help.contains("Usage"),
+            "{command:?} --help: {help}"
+        );
+        for section in spec_citations(&help) {
+            in_help += 1;
+            if !sections.contains(&section) {
+                broken.push(format!("hmdist {} --help: spec §{section}", command.join(" ")));
+            }
+        }
+        for (n, line) in help.lines().enumerate() {
+            if line.contains("spec §") && !line.contains("docs/spec.md §") {
+                broken.push(format!(
+                    "hmdist {} --help, line {}: 'spec §' without the file: {line}",
+                    command.join(" "),
+                    n + 1
+                ));
+            }
+        }
+    }
+    assert!(
+        cited > 100 && in_help > 5,
+        "{cited} citations, {in_help} in help: the scan is broken"
+    );
+    assert!(
+        broken.is_empty(),
+        "{} citations name no section of docs/spec.md:\n{}",
+        broken.len(),
+        broken.join("\n")
+    );
+}
+
+#[test]
+fn nothing_in_the_repository_points_outside_it() {
+    // Where the project is developed is not part of it: no path above the repository, no
+    // name of the place (spelled here in two pieces, so that this file does not hold it).
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let outside = ["../".to_string() + "shared", "work".to_string() + "place"];
+    let mut found = vec![];
+    for (path, text) in tracked_texts(root) {
+        for (n, line) in text.lines().enumerate() {
+            let lower = line.to_lowercase();
+            if let Some(word) = outside.iter().find(|w| lower.contains(w.as_str())) {
+                found.push(format!("{}:{}: {word}", path.display(), n + 1));
+            }
+        }
+    }
+    assert!(found.is_empty(), "{}", found.join("\n"));
+}

@@ -1,4 +1,4 @@
-//! The experiment runner (SPEC §4, §6): the paper's Table 1 shape, a report whose links all
+//! The experiment runner (spec §4, §6): the paper's Table 1 shape, a report whose links all
 //! resolve, and a cache that reuses an image exactly when nothing that determines it changed.
 
 mod common;

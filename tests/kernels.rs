@@ -1,4 +1,4 @@
-//! Every ray-casting kernel returns the same hit distances, bit for bit (SPEC §8, issue:
+//! Every ray-casting kernel returns the same hit distances, bit for bit (spec §8, issue:
 //! ray-casting engine): the SIMD kernels perform each lane's IEEE operations in the scalar
 //! kernel's order, and the traversal around them is shared.
 

@@ -1,4 +1,4 @@
-//! Scene files (SPEC §7): every format loads to the triangles, camera and light written into
+//! Scene files (spec §7): every format loads to the triangles, camera and light written into
 //! it, the OBJ export reads back exactly, and bad files give errors that name the file (and
 //! the line, where the format has lines). Test files are written at run time into a fresh
 //! directory under the system temp dir.

@@ -1,4 +1,4 @@
-//! Options end to end (SPEC §1, §3.3, §4, §7): `--max-distance`, photon holes and
+//! Options end to end (spec §1, §3.3, §4, §7): `--max-distance`, photon holes and
 //! `--max-radius`, the PNG's `clamp(s·H)` and `--scale`, the camera of a file with none, and
 //! `diff`'s `l_diag` from the JSON sidecar. Expected values come from the scene's geometry.
 //!

@@ -1,4 +1,4 @@
-//! The photon-map estimators (SPEC §3.3) against closed forms and against final gathering.
+//! The photon-map estimators (spec §3.3) against closed forms and against final gathering.
 
 mod common;
 
@@ -397,7 +397,7 @@ fn kiddo_reference(scene: &Scene, method: PhotonMethod, params: PhotonParams, si
 
 #[test]
 fn the_maps_gather_equals_kiddos_k_nearest_bit_for_bit() {
-    // SPEC §3.3's K nearest, found by kiddo instead of our tree: both sources, both methods,
+    // spec §3.3's K nearest, found by kiddo instead of our tree: both sources, both methods,
     // K = 64 and 1,024, with and without a gather radius (one that leaves some pixels short
     // of K photons), on 64² pixels of cube.
     let scene = Scene::load("cube").unwrap();

@@ -1,4 +1,4 @@
-//! H at given points (SPEC §8): the library's `points::hmd_at` and `hmdist points`, against
+//! H at given points (spec §8): the library's `points::hmd_at` and `hmdist points`, against
 //! the image's own pixels, a closed form, and bad input.
 
 mod common;
@@ -81,7 +81,7 @@ fn results_do_not_depend_on_batching() {
 
 #[test]
 fn a_bare_point_on_the_slab_floor_gives_three_halves_height() {
-    // SPEC §1: H = 3h/2 under cosine weighting on the floor of a slab, far from its edges.
+    // spec §1: H = 3h/2 under cosine weighting on the floor of a slab, far from its edges.
     let h = validation::SLAB_HEIGHT;
     let scene = validation::slab(h, 1000.0);
     let accel = Accel::build(&scene.mesh, BuildQuality::Fast);

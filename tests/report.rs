@@ -1,4 +1,4 @@
-//! The JSON sidecar of every method and backend (SPEC §7) says what was counted, with the
+//! The JSON sidecar of every method and backend (spec §7) says what was counted, with the
 //! values it must have, and `null` for what a method does not measure.
 //!
 //! The scene: [`floor_scene`], where every ray from the floor escapes.

@@ -1,5 +1,5 @@
 //! The progressive sampler of `gather` (`--sampler sobol`, issue #25; the default since
-//! issue #54): the closed forms of SPEC §1 hold with it, it is deterministic across thread
+//! issue #54): the closed forms of spec §1 hold with it, it is deterministic across thread
 //! counts, each round is its own sequence, every backend takes it, and `--sampler grid` still
 //! names the jittered grid. (Its stratification, every power-of-two prefix a (0,k,2)-net, is
 //! tested in `sampling.rs`.)

@@ -1,10 +1,10 @@
-//! The built-in scenes are the same triangles on every machine (SPEC §5): each is pinned by a
+//! The built-in scenes are the same triangles on every machine (spec §5): each is pinned by a
 //! hash of its triangles' corners, computed here independently of hmdist's own hashing.
 //!
 //! A change to a generator that moves any corner by one bit changes its hash. If such a change
 //! is intended, the images of that scene change too: update the pin in the same commit and say
 //! so. If a pin fails on one machine only, the generator depends on the platform (e.g. on a
-//! libm's `sin`), which SPEC §5 forbids.
+//! libm's `sin`), which spec §5 forbids.
 
 use hmdist::scene::procedural::{builtin, BUILTIN_NAMES};
 

@@ -1,4 +1,4 @@
-//! No ray escapes a closed mesh (SPEC §2, issue "watertight ray casting").
+//! No ray escapes a closed mesh (spec §2, issue "watertight ray casting").
 
 mod common;
 

@@ -3,7 +3,7 @@
 Usage: denoise_pictures.py REFERENCE.exr EMBREE.exr DENOISED.exr SCALE OUT.png
 
 Top row: the reference H, Embree at 256 rays, hmdist at 64 rays with --denoise, each grey =
-clamp(SCALE · H) (the scene's display scale, SPEC §4's picture). Bottom row, under each of
+clamp(SCALE · H) (the scene's display scale, spec §4's picture). Bottom row, under each of
 the last two: its difference from the reference, 1 − clamp(10 · SCALE · |ΔH|) (white: no
 difference); background pixels blue.
 """

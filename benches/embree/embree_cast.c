@@ -6,7 +6,7 @@
  * SCENE.obj: `hmdist scene export` (v and f lines, triangles). RAYS.hmdr: see
  * gather_rays.rs. Builds with RTC_BUILD_QUALITY_HIGH (and RTC_SCENE_FLAG_ROBUST for
  * `robust`), then casts every ray with rtcIntersect1 from THREADS threads (pixels handed out
- * in chunks), with tnear = 1e-6 of the scene's bounding-box diagonal (SPEC's d_min; with
+ * in chunks), with tnear = 1e-6 of the scene's bounding-box diagonal (the spec's d_min; with
  * tnear = 0 Embree finds the surface a ray leaves at t = 0). Times the build (rtcCommitScene) and the casting loop only. Prints one line in
  * the format of gather_rays.rs. */
 #include "embree_scene.h"

@@ -10,7 +10,7 @@
  * --method gather --rays N` does after the primary rays: N cosine-weighted directions on the
  * most nearly square a x b grid of strata, jittered with the same counter-based random numbers
  * (seed 1, keyed by pixel and ray), turned into world space by the same frame (Duff et al.
- * 2017), cast with rtcIntersect1 (tnear = 1e-6 of the scene's diagonal, SPEC's d_min), and
+ * 2017), cast with rtcIntersect1 (tnear = 1e-6 of the scene's diagonal, the spec's d_min), and
  * H = N / sum(1/t) in double. Only the gather is timed: generation, casting and sums, from
  * THREADS threads. CAST says how:
  *   loop  (default) each ray made inside the cast loop and cast at once with rtcIntersect1

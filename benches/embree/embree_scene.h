@@ -18,7 +18,7 @@ static double now(void) {
 
 /* The OBJ at `path` (v and f lines only: what `hmdist scene export` writes) as an Embree
  * scene, built with RTC_BUILD_QUALITY_HIGH (and RTC_SCENE_FLAG_ROBUST where `robust`) by
- * `threads` threads. Sets `*tnear` to SPEC's d_min (1e-6 of the bounding box's diagonal; with
+ * `threads` threads. Sets `*tnear` to the spec's d_min (1e-6 of the bounding box's diagonal; with
  * tnear = 0 Embree finds the surface a ray leaves at t = 0) and `*build` to the seconds the
  * build took (rtcCommitScene and the buffers, not the file). Exits with status 2 on an
  * unreadable file. */

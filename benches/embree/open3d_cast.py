@@ -7,7 +7,7 @@ Times the build (add_triangles plus the first query, which commits the scene) an
 casting calls only; rays go in chunks of about 1 M. Open3D has no tnear, and from hmdist's
 origins (offset off the surface by its rounding-error bound only) Embree 4 finds the surface
 a ray leaves again at t ≈ 0 for about a third of the rays, which then stop at once. So each
-origin is moved along its ray by SPEC's d_min (1e-6 of the diagonal), as the C peer's tnear
+origin is moved along its ray by the spec's d_min (1e-6 of the diagonal), as the C peer's tnear
 does; `self_hits` counts the hits still closer than d_min. Prints one line in the format of
 gather_rays.rs."""
 import sys

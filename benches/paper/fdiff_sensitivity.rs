@@ -5,11 +5,11 @@
 //! The gather here is written out independently of the estimators (no `GridBlocks`, no
 //! lanes): a pixel's primary hit, its normal turned to the camera, N directions on an `a × b`
 //! grid of strata (`hmdist::sampling::strata`), mapped by the weighting, cast with
-//! `RayCaster::hit_distances`, `H = N / Σ 1/max(d, d_min)` (SPEC §1). What varies:
+//! `RayCaster::hit_distances`, `H = N / Σ 1/max(d, d_min)` (spec §1). What varies:
 //!
-//! - the weighting: cosine (SPEC's default) or uniform;
-//! - the origin: the robust offset of SPEC §2, or a fixed offset `ε` along the normal (ε as
-//!   a multiple of SPEC's `d_min = 1e-6 l_diag`: ×10³ and ×10⁴), as a renderer with a scene
+//! - the weighting: cosine (the spec's default) or uniform;
+//! - the origin: the robust offset of spec §2, or a fixed offset `ε` along the normal (ε as
+//!   a multiple of the spec's `d_min = 1e-6 l_diag`: ×10³ and ×10⁴), as a renderer with a scene
 //!   epsilon would;
 //! - the pattern: jittered strata drawn per pixel (ours), or the strata centres, the same
 //!   pattern in every pixel (`regular`: what a fixed cube-map-like lookup would give);

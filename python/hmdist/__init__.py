@@ -289,7 +289,7 @@ class Scene:
 
 
 def f_diff(reference: npt.ArrayLike, test: npt.ArrayLike, l_diag: float) -> float:
-    """SPEC §4's f_diff: mean |ΔH| over pixels finite in both images, in percent of l_diag
+    """spec §4's f_diff: mean |ΔH| over pixels finite in both images, in percent of l_diag
     (positive and finite, else ValueError)."""
     r, t = np.asarray(reference), np.asarray(test)
     if r.ndim != 2 or r.shape != t.shape:

@@ -503,7 +503,7 @@ impl PyScene {
         Ok((image.into_any(), report, channels))
     }
 
-    /// Each pixel's first hit (SPEC §2) as flat float32 arrays: points [n, 3], normals [n, 3]
+    /// Each pixel's first hit (spec §2) as flat float32 arrays: points [n, 3], normals [n, 3]
     /// (facing the camera), point error bounds [n, 3], triangles (int64 [n], -1 for
     /// background; then the other rows are NaN).
     fn primary_hits<'py>(
@@ -746,7 +746,7 @@ impl PyScene {
     }
 }
 
-/// SPEC §4's f_diff of two images (float64 [h, w] each) of a scene with diagonal `l_diag`.
+/// spec §4's f_diff of two images (float64 [h, w] each) of a scene with diagonal `l_diag`.
 #[pyfunction]
 fn f_diff(
     reference: PyReadonlyArray2<'_, f64>,

@@ -2,7 +2,7 @@
 //!
 //! `gamma(n)` bounds the relative error of `n` successive f32 roundings. The hit point's error
 //! bound feeds [`offset_ray_origin`], which moves a ray origin just far enough off the surface
-//! that the ray cannot re-hit the surface it leaves: no epsilon tuned to one scene (SPEC §2).
+//! that the ray cannot re-hit the surface it leaves: no epsilon tuned to one scene (spec §2).
 
 use glam::Vec3;
 

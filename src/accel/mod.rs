@@ -1,4 +1,4 @@
-//! Ray casting: closest hits against the scene's triangles (SPEC §2). The engine's design,
+//! Ray casting: closest hits against the scene's triangles (spec §2). The engine's design,
 //! and what was measured and not kept: `docs/engine.md`.
 //!
 //! Guarantees every estimator relies on:

@@ -1,4 +1,4 @@
-//! `hmdist diff REF.exr TEST.exr`: f_diff (SPEC §4) and friends, whether the two are the same
+//! `hmdist diff REF.exr TEST.exr`: f_diff (spec §4) and friends, whether the two are the same
 //! bit for bit, and the difference picture.
 
 use std::path::{Path, PathBuf};

@@ -1,4 +1,4 @@
-//! Command-line interface (SPEC §7, §8): flags become the library's configuration, results
+//! Command-line interface (spec §7, §8): flags become the library's configuration, results
 //! become files and one summary line. Every error is the user's: printed as one paragraph
 //! with parameters spelled as flags, exit status 2 (clap's own usage errors exit 2 as well);
 //! an interrupted run exits with 130 (Ctrl-C) or 143 (SIGTERM) ([`signals`]); `diff --exact`
@@ -58,7 +58,7 @@ enum Command {
     /// Build a photon map once, for `render --photon-map` (e.g. for every shard).
     #[command(subcommand)]
     Photons(photons::PhotonsCommand),
-    /// Compare two HMD images: f_diff (SPEC §4), RMSE, mean relative error, difference picture.
+    /// Compare two HMD images: f_diff (docs/spec.md §4), RMSE, mean relative error, difference picture.
     Diff(diff::DiffArgs),
     /// Reproduce the paper's analysis on a scene: tables, notes and an HTML report.
     Experiment(experiment::ExperimentArgs),

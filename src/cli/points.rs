@@ -1,4 +1,4 @@
-//! `hmdist points`: H at the points of a file (SPEC §8), for callers that choose their own
+//! `hmdist points`: H at the points of a file (spec §8), for callers that choose their own
 //! points. Reads rows `x y z nx ny nz` from `.npy` (float32 or float64, shape [n, 6]) or CSV,
 //! writes H per row as `.npy` (float32 [n]) or CSV, by extension. Row i is keyed by i, as
 //! pixel i is in an image.
@@ -42,7 +42,7 @@ pub struct PointsArgs {
     #[arg(long, value_enum, default_value_t = Weighting::Cosine)]
     weighting: Weighting,
     /// How the directions fill the hemisphere: a progressive Owen-scrambled Sobol sequence,
-    /// or one jittered grid of the N rays (SPEC §3.1), as `render`'s gather.
+    /// or one jittered grid of the N rays (docs/spec.md §3.1), as `render`'s gather.
     #[arg(long, value_enum, default_value_t = Sampler::Sobol)]
     sampler: Sampler,
     /// Where the rays are cast: auto takes a hardware GPU where there is one.

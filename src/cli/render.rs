@@ -23,7 +23,7 @@ pub struct RenderArgs {
     /// Scene: a built-in (cube, hall, sphere, slab, dome) or a file (.obj, .ply, .gltf, .glb, .toml).
     #[arg(long, default_value = "cube")]
     scene: String,
-    /// Estimator (SPEC §3).
+    /// Estimator (docs/spec.md §3).
     #[arg(long, default_value = "gather", value_parser = method_names())]
     method: String,
     #[command(flatten)]

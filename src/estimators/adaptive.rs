@@ -201,7 +201,7 @@ impl Adaptive {
     }
 
     /// The directions drawn by `sampler`: rounds of jittered grids ([`Sampler::Grid`], this
-    /// builder's default, SPEC §3.1) or consecutive blocks of one progressive sequence
+    /// builder's default, spec §3.1) or consecutive blocks of one progressive sequence
     /// ([`Sampler::Sobol`], the default of [`AdaptiveParams`] and so of the CLI and Python).
     pub fn with_sampler(self, sampler: Sampler) -> Self {
         Adaptive { sampler, ..self }

@@ -1,4 +1,4 @@
-//! AOVs: per-pixel companions of H, written as EXR channels beside `Y` (SPEC §8).
+//! AOVs: per-pixel companions of H, written as EXR channels beside `Y` (spec §8).
 //!
 //! - `relerr`: relative standard error of H, from the spread of independent stratified
 //!   rounds (batch means);

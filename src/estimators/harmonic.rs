@@ -1,6 +1,6 @@
-//! The harmonic mean of distances, SPEC §1 equation (2): `H = N / Σ 1/d_i`.
+//! The harmonic mean of distances, spec §1 equation (2): `H = N / Σ 1/d_i`.
 
-/// How sample distances are clamped before they enter the mean (SPEC §1).
+/// How sample distances are clamped before they enter the mean (spec §1).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DistanceClamp {
     /// `d_min = 1e-6 · l_diag`: a grazing self-hit cannot drive H to zero.
@@ -10,7 +10,7 @@ pub struct DistanceClamp {
 }
 
 impl DistanceClamp {
-    /// The clamp of SPEC §1 for a scene with bounding-box diagonal `l_diag`.
+    /// The clamp of spec §1 for a scene with bounding-box diagonal `l_diag`.
     pub fn for_diagonal(l_diag: f32, max_distance: Option<f32>) -> Self {
         DistanceClamp {
             min: 1e-6 * l_diag,

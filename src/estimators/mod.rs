@@ -1,4 +1,4 @@
-//! The HMD estimators of SPEC §3, behind one interface, and the registry that names them.
+//! The HMD estimators of spec §3, behind one interface, and the registry that names them.
 //!
 //! The render driver ([`crate::render`]) finds each pixel's surface point with a primary ray
 //! and owns the loop over pixels: rows in parallel, progress, ray and hole counts, timings
@@ -50,7 +50,7 @@ use crate::error::Result;
 use crate::progress::Progress;
 use crate::report::{Details, Parameters, PhaseSeconds};
 
-/// The EXR channel of an image of H (SPEC §7).
+/// The EXR channel of an image of H (spec §7).
 pub const HMD_CHANNEL: &str = "Y";
 
 /// Each pixel's first surface hit, normal flipped to face the camera; `None` for background.
@@ -103,9 +103,9 @@ pub struct EstimateContext<'a> {
     pub accel: &'a Accel,
     /// The scene being rendered.
     pub scene: &'a crate::scene::Scene,
-    /// Counter-based random numbers are keyed by this seed (SPEC §2).
+    /// Counter-based random numbers are keyed by this seed (spec §2).
     pub seed: u64,
-    /// How sample distances are clamped (SPEC §1).
+    /// How sample distances are clamped (spec §1).
     pub clamp: DistanceClamp,
     /// The AOVs asked for (each one in [`Estimator::aovs`]).
     pub aovs: &'a [Aov],
@@ -250,14 +250,14 @@ pub trait Estimator: Sync {
     /// The method's parameters, for the report.
     fn parameters(&self) -> Parameters;
 
-    /// The name of the image's EXR channel: `Y` for H (SPEC §7); `E` for `irradiance`, whose
+    /// The name of the image's EXR channel: `Y` for H (spec §7); `E` for `irradiance`, whose
     /// image is irradiance, not H.
     fn channel(&self) -> &'static str {
         HMD_CHANNEL
     }
 
     /// The grey picture's default scale for an image of `scene` (grey = clamp(scale · value)):
-    /// the scene's own for H (SPEC §4); `irradiance` scales by the scene's size.
+    /// the scene's own for H (spec §4); `irradiance` scales by the scene's size.
     fn display_scale(&self, scene: &crate::scene::Scene) -> f32 {
         scene.display_scale
     }

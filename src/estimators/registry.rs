@@ -65,7 +65,7 @@ macro_rules! method {
 pub const METHODS: &[MethodEntry] = &[
     method!(
         "gather",
-        "Ray-traced final gathering (SPEC §3.1)",
+        "Ray-traced final gathering (docs/spec.md §3.1)",
         |p: GatherParams| Ok(Box::new(p.build()?))
     ),
     method!(
@@ -75,17 +75,17 @@ pub const METHODS: &[MethodEntry] = &[
     ),
     method!(
         "cubemap",
-        "Hemicube rasterisation, looked up with gather's directions (SPEC §3.2)",
+        "Hemicube rasterisation, looked up with gather's directions (docs/spec.md §3.2)",
         |p: CubemapParams| Ok(Box::new(p.build()?))
     ),
     method!(
         "photon1",
-        "Photon map, method I: harmonic mean of the gathered photons' own distances (SPEC §3.3)",
+        "Photon map, method I: harmonic mean of the gathered photons' own distances (docs/spec.md §3.3)",
         |p: PhotonParams| Ok(Box::new(PhotonEstimator::new(PhotonMethod::StoredDistance, p)?))
     ),
     method!(
         "photon2",
-        "Photon map, method II: distances from the pixel to the photons' next hits (SPEC §3.3)",
+        "Photon map, method II: distances from the pixel to the photons' next hits (docs/spec.md §3.3)",
         |p: PhotonParams| Ok(Box::new(PhotonEstimator::new(PhotonMethod::NextHitPoint, p)?))
     ),
     method!(

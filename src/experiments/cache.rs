@@ -241,26 +241,22 @@ impl Runner<'_> {
     /// as this run asks for it (the backend and BVH preset as requested: `auto` stays `auto`).
     pub(super) fn key(&self, estimator: &dyn Estimator, seed: u64, aovs: &[Aov]) -> RenderKey {
         let options = self.render_options(seed, aovs);
-        RenderKey {
-            hmdist_version: env!("CARGO_PKG_VERSION").into(),
-            scene: self.scene.name.clone(),
-            scene_content: format!("{:016x}", self.scene_content),
-            method: estimator.method().into(),
-            parameters: estimator.parameters(),
-            backend: serde_json::to_value(self.backend)
-                .ok()
-                .and_then(|v| v.as_str().map(String::from))
-                .unwrap_or_default(),
-            adapter_class: None,
-            bvh: options.bvh_quality.name().into(),
-            width: options.width,
-            height: options.height,
-            seed,
-            max_distance: options.max_distance,
+        let backend = serde_json::to_value(self.backend)
+            .ok()
+            .and_then(|v| v.as_str().map(String::from))
+            .unwrap_or_default();
+        let image = crate::report::KeyImage {
             aovs: aovs.iter().map(|a| a.name().into()).collect(),
-            ao_radius: None,
-            denoise: options.denoise,
-        }
+            seed,
+            ..options.key_image()
+        };
+        RenderKey::new(
+            (&self.scene.name, self.scene_content),
+            (estimator.method(), estimator.parameters()),
+            options.bvh_quality.name(),
+            image,
+        )
+        .on(&backend, None)
     }
 
     /// Renames the cached files of `legacy` (the image, and any of its parts) to `stem`'s,

@@ -1,4 +1,4 @@
-//! The paper's analysis, reproduced on any scene (SPEC §4, §6): experiments that render with
+//! The paper's analysis, reproduced on any scene (spec §4, §6): experiments that render with
 //! several estimators and parameters, compare against a final-gathering reference, and write
 //! CSV and Markdown tables and an HTML report.
 //!

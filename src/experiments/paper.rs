@@ -1,4 +1,4 @@
-//! Every number the paper publishes that the experiments compare against (SPEC §6), named.
+//! Every number the paper publishes that the experiments compare against (spec §6), named.
 //! Scene A and scene B are the paper's own scenes; its machines were a Xeon E5420 at 2.5 GHz
 //! (plain C++) and a GeForce 8800 GTX.
 
@@ -16,7 +16,7 @@ pub enum PaperScene {
     B,
 }
 
-/// The paper's scene that the built-in scene `name` stands for (SPEC §5: `cube` for A, `hall`
+/// The paper's scene that the built-in scene `name` stands for (spec §5: `cube` for A, `hall`
 /// for B); `None` for any other scene.
 pub fn analogue(name: &str) -> Option<PaperScene> {
     match name {
@@ -86,7 +86,7 @@ pub fn table2_row(rays: u32) -> Option<&'static Table2Row> {
 
 /// Table 1's values in the text's order, matched to the ray counts the halves are headed with
 /// as they read (the first four headings of each half): `(CPU A, CPU B, GPU A)` at `rays`,
-/// where the reading gives one. Which count each value belongs to is uncertain (SPEC §6).
+/// where the reading gives one. Which count each value belongs to is uncertain (spec §6).
 pub fn table1_as_read(rays: u32) -> Option<(f64, f64, f64)> {
     const READ_RAYS: [u32; 8] = [32, 64, 128, 256, 1024, 2048, 4096, 8192];
     let i = READ_RAYS.iter().position(|&r| r == rays)?;

@@ -72,7 +72,7 @@ impl RaySweep {
 }
 
 /// `gather` with `rays` rays (on the runner's backend), on the jittered grid of the paper's
-/// sampling (SPEC §3.1), named so that its images and their cache keys stay as published.
+/// sampling (spec §3.1), named so that its images and their cache keys stay as published.
 pub(super) fn gather_params(rays: u32) -> GatherParams {
     GatherParams {
         rays,
@@ -248,7 +248,7 @@ pub fn table1(runner: &Runner) -> Result<Section> {
         name: "table1".into(),
         findings: table1_findings(&sweep),
         notes: vec![format!(
-            "Pixels excluded from f_diff (not finite in one of the images): {}. The paper's columns are read in the text's order against the headings of its two halves (32 … 256, then 1,024 … 8,192); one column of each half was lost, so which N each value belongs to is uncertain (SPEC §6).",
+            "Pixels excluded from f_diff (not finite in one of the images): {}. The paper's columns are read in the text's order against the headings of its two halves (32 … 256, then 1,024 … 8,192); one column of each half was lost, so which N each value belongs to is uncertain (spec §6).",
             sweep.excluded
         )],
         tables: vec![ours, published],

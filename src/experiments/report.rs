@@ -57,7 +57,7 @@ fn findings_summary(runner: &Runner) -> String {
 pub fn write(runner: &Runner) -> Result<()> {
     let mut body = format!(
         "<h1>hmdist experiments: <code>{}</code>, preset {}</h1>\n<p>{}² pixels, reference: gather with {} rays. \
-         f_diff is SPEC §4's mean |ΔH| in percent of the scene diagonal ({:.3}).</p>\n",
+         f_diff is spec §4's mean |ΔH| in percent of the scene diagonal ({:.3}).</p>\n",
         escape(&runner.scene.name),
         runner.preset.name(),
         runner.params.size,

@@ -247,7 +247,7 @@ impl<'a> Runner<'a> {
     }
 
     /// The reference image's parameters: gather with the preset's reference ray count, on the
-    /// jittered grid (SPEC §3.1), so that the committed references keep their cache keys.
+    /// jittered grid (spec §3.1), so that the committed references keep their cache keys.
     pub fn reference_params(&self) -> GatherParams {
         GatherParams {
             rays: self.params.reference_rays,

@@ -1,4 +1,4 @@
-// Final gathering on the GPU (SPEC §3.1): the twin of PointGather::round in
+// Final gathering on the GPU (spec §3.1): the twin of PointGather::round in
 // src/estimators/gather.rs. One invocation per point casts the point's rays [first_ray,
 // end_ray) in ray order, so a point's sums do not depend on how the host splits the work into
 // dispatches: what a dispatch leaves in `states` and `sums` the next one continues from.

@@ -1,6 +1,6 @@
 //! Hemicubes on the GPU, for the cube-map estimator's GPU backend: wgpu rasterises the five
 //! faces of many points' hemicubes per submission into one R32Float atlas, and a compute pass
-//! does the lookups, so only H per point comes back (SPEC §3.2). The estimator
+//! does the lookups, so only H per point comes back (spec §3.2). The estimator
 //! ([`crate::estimators::Cubemap`]) turns that into its image and report.
 //!
 //! Batching: each hemicube is a `2R × 6R` block of the atlas (top face `2R × 2R`, then the four

@@ -1,4 +1,4 @@
-// Hemicube rasterisation and lookup on the GPU (SPEC §3.2). Mirrors hemicube.rs: the same
+// Hemicube rasterisation and lookup on the GPU (spec §3.2). Mirrors hemicube.rs: the same
 // texel layout. The gather directions come from src/gpu/sampling.wgsl, which the host appends.
 enable clip_distances;
 

@@ -1,5 +1,5 @@
-//! OpenEXR files with a float32 channel `Y` holding H per pixel (SPEC §7), and one float32
-//! channel per AOV beside it, named as the AOV (SPEC §8). An irradiance image
+//! OpenEXR files with a float32 channel `Y` holding H per pixel (spec §7), and one float32
+//! channel per AOV beside it, named as the AOV (spec §8). An irradiance image
 //! (`--method irradiance`) names its channel `E` instead of `Y`.
 
 use std::io::Cursor;

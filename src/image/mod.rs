@@ -1,4 +1,4 @@
-//! HMD images and the files they are written to (SPEC §4, §7).
+//! HMD images and the files they are written to (spec §4, §7).
 //!
 //! An [`HmdImage`] holds H per pixel, row-major, row 0 at the top; NaN marks background
 //! pixels and holes, `+inf` pixels where every sample escaped. Every file is written to a

@@ -1,4 +1,4 @@
-//! Grey pictures of HMD images (SPEC §4): `grey = clamp(s · H)`; NaN pixels (background,
+//! Grey pictures of HMD images (spec §4): `grey = clamp(s · H)`; NaN pixels (background,
 //! holes) are drawn black, `+inf` white. False-colour pictures of AOVs, with a legend bar.
 
 use std::io::Cursor;

@@ -1,4 +1,4 @@
-//! Point files for `hmdist points` (SPEC §8): rows `x y z nx ny nz` in, H per row out, as
+//! Point files for `hmdist points` (spec §8): rows `x y z nx ny nz` in, H per row out, as
 //! `.npy` (read: float32 or float64 of shape [n, 6], C or Fortran order; written: float32 of
 //! shape `[n]`) or CSV (six numbers per line, commas or spaces; a header line, blank lines and
 //! `#` comments are skipped; written: one value per line), by extension. `.npy` needs the

@@ -1,4 +1,4 @@
-//! H at arbitrary surface points (SPEC §8), for a caller that chooses its own points, such as
+//! H at arbitrary surface points (spec §8), for a caller that chooses its own points, such as
 //! an irradiance cache placing records.
 //!
 //! Each point is gathered exactly as an image's pixel is ([`Gather`]), with its random

@@ -1,5 +1,5 @@
 //! The render report: every parameter, the scene's statistics and the timings of one image,
-//! as typed data. Serialised once, as the JSON sidecar of SPEC §7, whose keys scripts rely on
+//! as typed data. Serialised once, as the JSON sidecar of spec §7, whose keys scripts rely on
 //! and which therefore keep their names; fields that a method does not measure are `null`
 //! (or absent, for a method's own groups), never zero.
 
@@ -70,7 +70,7 @@ pub struct RenderReport {
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub shards: Option<Vec<ShardTiming>>,
     /// Gather rays per pixel N, where the method casts a fixed number (`null` for the photon
-    /// methods and adaptive): the SPEC's key, beside `parameters.rays`.
+    /// methods and adaptive): the spec's key, beside `parameters.rays`.
     pub rays: Option<u32>,
     /// The method's parameters.
     #[serde(default)]
@@ -182,9 +182,12 @@ pub struct ShardReport {
     pub index: u32,
     /// How many shards.
     pub count: u32,
-    /// Hash of the scene, method, parameters, size, seed, clamp, AOVs and version: the
-    /// key's older, smaller form, which `merge` compares where a part has no key.
-    pub fingerprint: String,
+    /// Hash of the scene, method, parameters, size, seed, clamp, AOVs and version
+    /// (`fingerprint` in the JSON): what parts carried before they carried a key, still
+    /// written so that `merge` can join a part that has only it with parts written since
+    /// (it compares it where a part has no key). The key is what determines the pixels.
+    #[serde(rename = "fingerprint")]
+    pub legacy_fingerprint: String,
     /// Everything that determines the pixels; absent from reports written before it was
     /// added (`merge` then compares fingerprints alone).
     #[serde(skip_serializing_if = "Option::is_none", default)]
@@ -242,12 +245,75 @@ pub struct RenderKey {
     pub denoise: Option<DenoiseParams>,
 }
 
+/// What every key holds of the image it names, whoever builds it: size, random numbers,
+/// distance clamp, AOVs and filter ([`crate::options::RenderOptions::key_image`]).
+#[derive(Clone, Debug)]
+pub struct KeyImage {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Seed of the random numbers.
+    pub seed: u64,
+    /// Distance clamp; `None` for none.
+    pub max_distance: Option<f32>,
+    /// The AOV channels, in order.
+    pub aovs: Vec<String>,
+    /// The denoising filter's parameters, where the image is filtered.
+    pub denoise: Option<DenoiseParams>,
+}
+
 impl RenderKey {
+    /// The one constructor of a key, which every key is built by (the render driver's, the
+    /// experiment cache's, a photon map's): hmdist's own version; the scene by name (empty for
+    /// a key of its content alone) and content ([`crate::scene::Scene::fingerprint`]); the
+    /// method's registry name and parameters; the BVH preset's name; the image. It ran on the
+    /// CPU with no `ao` radius until [`RenderKey::on`] and [`RenderKey::with_ao_radius`] say
+    /// otherwise.
+    pub fn new(
+        (scene, scene_content): (&str, u64),
+        (method, parameters): (&str, Parameters),
+        bvh: &str,
+        image: KeyImage,
+    ) -> RenderKey {
+        RenderKey {
+            hmdist_version: env!("CARGO_PKG_VERSION").into(),
+            scene: scene.into(),
+            scene_content: format!("{scene_content:016x}"),
+            method: method.into(),
+            parameters,
+            backend: "cpu".into(),
+            adapter_class: None,
+            bvh: bvh.into(),
+            width: image.width,
+            height: image.height,
+            seed: image.seed,
+            max_distance: image.max_distance,
+            aovs: image.aovs,
+            ao_radius: None,
+            denoise: image.denoise,
+        }
+    }
+
+    /// This key for an image made on `backend` (`cpu`, `gpu`; as asked, `auto` too, in the
+    /// experiment cache) by an adapter of `adapter_class`.
+    pub fn on(self, backend: &str, adapter_class: Option<String>) -> RenderKey {
+        RenderKey {
+            backend: backend.into(),
+            adapter_class,
+            ..self
+        }
+    }
+
+    /// This key for an image whose `ao` AOV used `ao_radius`.
+    pub fn with_ao_radius(self, ao_radius: Option<f32>) -> RenderKey {
+        RenderKey { ao_radius, ..self }
+    }
+
     /// A stable 64-bit hash of every field (its JSON, fields in declaration order): what the
     /// experiment cache names an image by and a photon map file is checked by. The one set of
-    /// fields that determines an image is this struct's; everything that keys an image builds
-    /// one (the render driver, the experiment cache, the photon map), so a field added here
-    /// is a field every key has.
+    /// fields that determines an image is this struct's, and [`RenderKey::new`] the one place
+    /// that fills it, so a field added here is a field every key has.
     pub fn digest(&self) -> u64 {
         crate::scene::stable_hash(serde_json::to_string(self).expect("a key serialises").as_bytes())
     }

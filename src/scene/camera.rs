@@ -1,4 +1,4 @@
-//! The pinhole camera of SPEC §2.
+//! The pinhole camera of spec §2.
 //!
 //! Convention (other tools line up with hmdist pixel for pixel through it):
 //! `f = normalize(target − eye)`, `r = normalize(f × up)`, `u = r × f`; pixel (px, py), row 0 at
@@ -22,7 +22,7 @@ pub struct Camera {
     pub fov_y_deg: f32,
 }
 
-/// A camera prepared for one image size: the frame and scale factors of SPEC §2.
+/// A camera prepared for one image size: the frame and scale factors of spec §2.
 #[derive(Clone, Copy, Debug)]
 pub struct CameraRays {
     eye: Vec3,

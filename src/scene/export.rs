@@ -1,4 +1,4 @@
-//! Writes meshes as Wavefront OBJ (`hmdist scene export`, SPEC §7).
+//! Writes meshes as Wavefront OBJ (`hmdist scene export`, spec §7).
 //!
 //! The file holds a comment line with the counts, then `v x y z` per vertex and `f a b c`
 //! per triangle (1-based indices), nothing else. Coordinates are written with Rust's `{}`

@@ -1,4 +1,4 @@
-//! The spot light that light-sourced photons start from (SPEC §3.3).
+//! The spot light that light-sourced photons start from (spec §3.3).
 
 use glam::Vec3;
 

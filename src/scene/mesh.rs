@@ -1,7 +1,7 @@
 //! Indexed triangle meshes.
 //!
 //! Units: scene units throughout (whatever the file used). Triangles are two-sided: their
-//! winding is kept for export but never used to decide which side is "outside" (SPEC §1).
+//! winding is kept for export but never used to decide which side is "outside" (spec §1).
 
 use glam::{Affine3A, Vec3};
 
@@ -30,7 +30,7 @@ impl Bounds {
         self.max = self.max.max(p);
     }
 
-    /// Length of the diagonal: `l_diag` of SPEC §1 and §4.
+    /// Length of the diagonal: `l_diag` of spec §1 and §4.
     pub fn diagonal(&self) -> f32 {
         (self.max - self.min).length()
     }

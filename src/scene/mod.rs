@@ -1,8 +1,8 @@
-//! Scenes: geometry, camera, spot light and display scale (SPEC §2, §5, §7).
+//! Scenes: geometry, camera, spot light and display scale (spec §2, §5, §7).
 //!
 //! A scene comes from a built-in procedural generator (`cube`, `hall`, and the closed-form
 //! validation scenes `sphere`, `slab`, `dome`) or from a file (OBJ, PLY, glTF/GLB, or the TOML
-//! scene description of SPEC §7). Scenes are y-up unless their file says otherwise.
+//! scene description of spec §7). Scenes are y-up unless their file says otherwise.
 
 pub mod camera;
 pub mod export;

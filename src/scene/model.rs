@@ -18,7 +18,7 @@ pub struct Scene {
     pub camera: Camera,
     /// The spot light for light-sourced photons, where the scene has one.
     pub light: Option<SpotLight>,
-    /// Grey level per unit of H in pictures: grey = clamp(display_scale · H) (SPEC §4).
+    /// Grey level per unit of H in pictures: grey = clamp(display_scale · H) (spec §4).
     pub display_scale: f32,
 }
 
@@ -34,7 +34,7 @@ impl Scene {
         self.mesh.bounds()
     }
 
-    /// `l_diag`: the length of the bounding-box diagonal (SPEC §1, §4).
+    /// `l_diag`: the length of the bounding-box diagonal (spec §1, §4).
     pub fn diagonal(&self) -> f32 {
         self.bounds().diagonal()
     }

@@ -1,5 +1,5 @@
 //! The CPU backend of the cube-map estimator: each texel holds what a ray through its centre
-//! sees, which is what rasterisation stores there (SPEC §3.2).
+//! sees, which is what rasterisation stores there (spec §3.2).
 //!
 //! Only texels that some gather direction looks up are filled (a texel's depth does not
 //! depend on which others are filled), so the cost is one ray per distinct texel looked up,

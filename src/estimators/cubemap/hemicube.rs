@@ -1,4 +1,4 @@
-//! Hemicube geometry (SPEC §3.2; paper §2.2.3, Fig. 3–4), shared by the CPU and GPU backends.
+//! Hemicube geometry (spec §3.2; paper §2.2.3, Fig. 3–4), shared by the CPU and GPU backends.
 //!
 //! In the local frame of a surface point (z = normal, x = t, y = b) the hemicube has five
 //! faces: the top face (axis +z, `2R × 2R` texels) and four side faces (axes ±x, ±y,

@@ -1,4 +1,4 @@
-//! `cubemap`: hemicube rasterisation (SPEC §3.2; paper §2.2.3, §3.2, Fig. 3–4).
+//! `cubemap`: hemicube rasterisation (spec §3.2; paper §2.2.3, §3.2, Fig. 3–4).
 //!
 //! Per pixel, a hemicube of per-quadrant resolution `R` around the surface normal holds the
 //! depth of the nearest surface per texel; the same gather directions as `gather` look it up

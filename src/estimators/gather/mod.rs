@@ -1,4 +1,4 @@
-//! `gather`: ray-traced final gathering (SPEC §3.1; paper §3.1).
+//! `gather`: ray-traced final gathering (spec §3.1; paper §3.1).
 //!
 //! `N` rays per pixel, stratified on the most nearly square `a × b` grid, jittered, mapped to
 //! the hemisphere around the camera-facing normal by the chosen weighting; `H = N / Σ 1/d`.
@@ -74,7 +74,7 @@ pub struct GatherParams {
     pub weighting: Weighting,
     /// How the directions fill the hemisphere: a progressive Owen-scrambled Sobol sequence
     /// (each round its own; 14–29 % lower f_diff at equal N on `cube` and `hall`), or one
-    /// jittered grid of the N rays (SPEC §3.1, the paper's experiments), on either backend.
+    /// jittered grid of the N rays (docs/spec.md §3.1, the paper's experiments), on either backend.
     #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Sampler::Sobol))]
     pub sampler: Sampler,
     /// Cast the rays as R independent rounds (R divides N), for the relerr AOV
@@ -175,7 +175,7 @@ impl Gather {
     }
 
     /// The directions drawn by `sampler` on either backend: this builder's default is
-    /// [`Sampler::Grid`] (SPEC §3.1); [`GatherParams`]' default, so the CLI's and Python's,
+    /// [`Sampler::Grid`] (spec §3.1); [`GatherParams`]' default, so the CLI's and Python's,
     /// is [`Sampler::Sobol`].
     pub fn with_sampler(self, sampler: Sampler) -> Result<Self> {
         Ok(Gather { sampler, ..self })
@@ -266,7 +266,7 @@ impl Gather {
     /// The gather directions of the point keyed `key`, in its local frame (z = normal), as one
     /// round of all its rays (one stratified grid, or the first N points of the progressive
     /// sequence): the one definition shared by `gather` (with one round) and the CPU cube
-    /// map, which looks the same directions up in its hemicube (SPEC §3.2). The GPU cube
+    /// map, which looks the same directions up in its hemicube (spec §3.2). The GPU cube
     /// map's shader mirrors the grid.
     #[inline]
     pub fn directions(&self, seed: u64, key: u64) -> impl Iterator<Item = Vec3> + '_ {
@@ -495,7 +495,7 @@ pub(crate) enum AoRadius {
     Median,
 }
 
-/// Why a radius given without the `ao` AOV is refused: nothing would read it (SPEC §8).
+/// Why a radius given without the `ao` AOV is refused: nothing would read it (spec §8).
 pub(crate) const AO_RADIUS_UNREAD: &str =
     "is read only by the ao AOV: ask for that AOV too, or leave the radius out";
 

@@ -1,4 +1,4 @@
-//! `photon1` and `photon2`: the photon-map estimators (SPEC §3.3; paper §3.3–3.4, §4.2).
+//! `photon1` and `photon2`: the photon-map estimators (spec §3.3; paper §3.3–3.4, §4.2).
 //!
 //! Photon paths are traced from the spot light or the camera ([`trace`]); each bounce stores
 //! a photon at its start point with the distance to the next hit. At a pixel, the `K` nearest
@@ -23,7 +23,7 @@ use crate::error::{Error, Result};
 use crate::options::{in_pool, RenderOptions};
 use crate::progress::Progress;
 pub use crate::report::SourceKind;
-use crate::report::{Details, Parameters, PhaseSeconds, PhotonDetails, RenderKey};
+use crate::report::{Details, KeyImage, Parameters, PhaseSeconds, PhotonDetails, RenderKey};
 use crate::scene::Scene;
 pub use map::{GatherScratch, MapHeader, PhotonMap, PhotonMethod};
 pub use trace::{trace_photons, PathRules, PhotonSource, PhotonTrace, TracedPhoton};
@@ -206,31 +206,30 @@ impl PhotonEstimator {
         } else {
             (0, 0)
         };
-        let key = RenderKey {
-            hmdist_version: env!("CARGO_PKG_VERSION").into(),
-            scene: String::new(),
-            scene_content: format!("{:016x}", scene.fingerprint()),
-            method: self.method.name().into(),
-            parameters: Parameters::of(
-                &MapParameters {
-                    photons: p.photons,
-                    source: p.source,
-                    max_bounces: p.max_bounces,
-                    absorption: p.absorption,
-                },
-                &[],
+        let key = RenderKey::new(
+            ("", scene.fingerprint()),
+            (
+                self.method.name(),
+                Parameters::of(
+                    &MapParameters {
+                        photons: p.photons,
+                        source: p.source,
+                        max_bounces: p.max_bounces,
+                        absorption: p.absorption,
+                    },
+                    &[],
+                ),
             ),
-            backend: "cpu".into(),
-            adapter_class: None,
-            bvh: "any".into(),
-            width,
-            height,
-            seed,
-            max_distance: None,
-            aovs: vec![],
-            ao_radius: None,
-            denoise: None,
-        };
+            "any",
+            KeyImage {
+                width,
+                height,
+                seed,
+                max_distance: None,
+                aovs: vec![],
+                denoise: None,
+            },
+        );
         key.digest()
     }
 

@@ -1,4 +1,4 @@
-//! Photon tracing (SPEC §3.3): diffuse paths from the spot light or the camera, photons stored
+//! Photon tracing (spec §3.3): diffuse paths from the spot light or the camera, photons stored
 //! at the start point of each bounce.
 //!
 //! Path `i` draws its random numbers from stream `i` of a counter-based generator, and paths

@@ -1,4 +1,4 @@
-//! glTF 2.0 (`.gltf` JSON and `.glb` binary) scenes (SPEC §7), read with the `gltf` crate.
+//! glTF 2.0 (`.gltf` JSON and `.glb` binary) scenes (spec §7), read with the `gltf` crate.
 //!
 //! The default scene (else the first; else every root node) is walked from its roots, each
 //! node's world matrix applied to its mesh. Supported: `TRIANGLES`, `TRIANGLE_STRIP` and

@@ -1,10 +1,10 @@
-//! Scene files: OBJ, PLY, glTF 2.0 / GLB meshes and the TOML scene description (SPEC §7).
+//! Scene files: OBJ, PLY, glTF 2.0 / GLB meshes and the TOML scene description (spec §7).
 //!
 //! The format follows the extension (case-insensitive): `.obj`, `.ply`, `.gltf`, `.glb`,
 //! `.toml`. A mesh file gives triangles, and a glTF file may also give a camera and a spot
 //! light; what a file lacks is filled in from its bounds ([`framing_camera`],
 //! [`default_display_scale`]). Only positions and faces are read: normals, texture
-//! coordinates and materials play no part in H (surfaces are diffuse and two-sided, SPEC §1).
+//! coordinates and materials play no part in H (surfaces are diffuse and two-sided, spec §1).
 //!
 //! Every error is an [`Error::File`] naming the file, and the line where the format has
 //! lines. Loaders never panic on bad input: where a parsing crate can panic on malformed

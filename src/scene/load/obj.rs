@@ -1,4 +1,4 @@
-//! Wavefront OBJ meshes (SPEC §7), read with `tobj`.
+//! Wavefront OBJ meshes (spec §7), read with `tobj`.
 //!
 //! Supported: `v x y z [w]` (and `v x y z r g b`, colour ignored), `f` with any number of
 //! corners in any of the forms `v`, `v/vt`, `v//vn`, `v/vt/vn`, negative (relative) indices,

@@ -1,4 +1,4 @@
-//! Stanford PLY meshes (SPEC §7), read with `ply-rs-bw`.
+//! Stanford PLY meshes (spec §7), read with `ply-rs-bw`.
 //!
 //! Supported: `ascii`, `binary_little_endian` and `binary_big_endian`; a `vertex` element
 //! with scalar `x`, `y`, `z` properties of any numeric type (float and double in practice);

@@ -1,4 +1,4 @@
-//! The TOML scene description of SPEC §7: meshes placed in a scene, camera, spot light and
+//! The TOML scene description of spec §7: meshes placed in a scene, camera, spot light and
 //! display scale.
 //!
 //! ```toml

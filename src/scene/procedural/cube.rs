@@ -1,4 +1,4 @@
-//! `cube`: the analogue of the paper's scene A (SPEC §5).
+//! `cube`: the analogue of the paper's scene A (spec §5).
 //!
 //! A closed, watertight cube room 10 units a side (read them as metres; y up, the floor on
 //! y = 0, x and z from −5 to 5) holding five finely detailed objects: a statue of a waving

@@ -1,4 +1,4 @@
-//! `hall`: the analogue of the paper's scene B (SPEC §5).
+//! `hall`: the analogue of the paper's scene B (spec §5).
 //!
 //! A hall 40 × 12 × 25 units (read them as metres; y up, the floor on y = 0, x from −20 to
 //! 20, z from −12.5 to 12.5) with a large window cut into its +z wall: the hall is not

@@ -1,8 +1,8 @@
 //! Built-in scenes, generated in code and deterministic: the same triangles on every machine
-//! (SPEC §5). No data files.
+//! (spec §5). No data files.
 //!
 //! - `cube` and `hall`: analogues of the paper's scenes A and B.
-//! - `sphere`, `slab`, `dome`: validation scenes whose H is known in closed form (SPEC §1).
+//! - `sphere`, `slab`, `dome`: validation scenes whose H is known in closed form (spec §1).
 
 pub mod cube;
 pub mod hall;

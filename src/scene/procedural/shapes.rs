@@ -1,9 +1,9 @@
-//! Mesh building blocks for the procedural scenes `cube` and `hall` (SPEC §5).
+//! Mesh building blocks for the procedural scenes `cube` and `hall` (spec §5).
 //!
 //! Units: scene units, y up. Every builder here returns a closed surface unless its doc says
 //! otherwise: seams share vertices, and ends are closed by fans to a pole rather than by
 //! collapsed rings, so there are no zero-area triangles. Winding is consistent within a
-//! builder, but nothing relies on it: triangles are two-sided (SPEC §1).
+//! builder, but nothing relies on it: triangles are two-sided (spec §1).
 //!
 //! This file holds the primitives (sweeps, turnings, spheres, capsules, tubes, boxes); the
 //! submodules build the scenes' objects from them: the room shell, figures, architecture,

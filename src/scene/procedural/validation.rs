@@ -1,4 +1,4 @@
-//! Scenes whose harmonic mean distance is known in closed form (SPEC §1), for tests and for
+//! Scenes whose harmonic mean distance is known in closed form (spec §1), for tests and for
 //! users who want to check an estimator on their own machine.
 //!
 //! - `sphere(R)`: the inside of a closed sphere; every point has `H = R` under cosine

@@ -1,5 +1,5 @@
 //! The photon map: a kd-tree of our own over photon positions, with each method's payload and
-//! nothing else (SPEC §3.3), and its K-nearest gather.
+//! nothing else (spec §3.3), and its K-nearest gather.
 //!
 //! **Layout.** Photons are reordered so that each leaf (at most [`LEAF`] photons) is a
 //! contiguous range, and stored structure-of-arrays in that order: positions (3 × f32), the
@@ -39,7 +39,7 @@ use crate::error::{Error, Result};
 /// Most photons per leaf.
 pub const LEAF: usize = 32;
 
-/// Which distance a gathered photon contributes (SPEC §3.3).
+/// Which distance a gathered photon contributes (spec §3.3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PhotonMethod {
     /// Method I: the photon's own stored distance `d_j`.

@@ -1,4 +1,4 @@
-//! Architecture of the procedural scenes (SPEC §5): fluted columns, arches, balustrades and
+//! Architecture of the procedural scenes (spec §5): fluted columns, arches, balustrades and
 //! staircases. Flutes, mouldings and rows of balusters are the hall's fine detail.
 //!
 //! Units: scene units, y up; each piece stands on y = 0 at the origin, placed by its caller.

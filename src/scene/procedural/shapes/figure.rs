@@ -1,4 +1,4 @@
-//! A stylised human figure, the statue of the procedural scenes (SPEC §5): fingers, toes, ears
+//! A stylised human figure, the statue of the procedural scenes (spec §5): fingers, toes, ears
 //! and a nose give the thin parts and tight corners of the paper's scene A.
 //!
 //! Units: about 1.75 scene units tall (read them as metres), standing on y = 0, facing +z, so

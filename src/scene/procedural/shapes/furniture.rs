@@ -1,4 +1,4 @@
-//! Furniture of the hall (SPEC §5): tables and chairs with turned legs and spindles, and
+//! Furniture of the hall (spec §5): tables and chairs with turned legs and spindles, and
 //! chandeliers hanging on chains. Many thin parts close to each other and to the floor.
 //!
 //! Units: scene units read as metres (a table is 0.78 high), y up; each piece stands (or, for

@@ -1,4 +1,4 @@
-//! Sculptural ornaments of the procedural scenes (SPEC §5): a torus knot, a bumpy sphere, a
+//! Sculptural ornaments of the procedural scenes (spec §5): a torus knot, a bumpy sphere, a
 //! cluster of small boxes and the pedestals they stand on. Thin tubes, narrow slots and
 //! crevices: the places where a harmonic mean distance is small and hard to estimate.
 //!

@@ -1,4 +1,4 @@
-//! Room shells: the walls, floor and ceiling of a box-shaped room (SPEC §5).
+//! Room shells: the walls, floor and ceiling of a box-shaped room (spec §5).
 //!
 //! Units: scene units, y up. The shell is a grid of square-ish cells on the six faces of the
 //! room's box, every lattice point one shared vertex: walls meet the floor and ceiling on the
