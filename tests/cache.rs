@@ -16,24 +16,28 @@ use hmdist::scene::Scene;
 const SIZE: &str = "64x48";
 
 /// `render --method irradiance` of `scene` at `size` with `rays` rays, into `out`.
-fn irradiance(dir: &Scratch, out: &str, (scene, size, rays): (&str, &str, &str)) {
-    hmdist_ok(
-        dir.path(),
-        &[
-            "render",
-            "--quiet",
-            "--method",
-            "irradiance",
-            "--scene",
-            scene,
-            "--size",
-            size,
-            "--rays",
-            rays,
-            "--out",
-            out,
-        ],
-    );
+fn irradiance(dir: &Scratch, out: &str, scene_size_rays: (&str, &str, &str)) {
+    irradiance_with(dir, out, scene_size_rays, &[]);
+}
+
+/// [`irradiance`] with `extra` flags.
+fn irradiance_with(dir: &Scratch, out: &str, (scene, size, rays): (&str, &str, &str), extra: &[&str]) {
+    let mut args = vec![
+        "render",
+        "--quiet",
+        "--method",
+        "irradiance",
+        "--scene",
+        scene,
+        "--size",
+        size,
+        "--rays",
+        rays,
+        "--out",
+        out,
+    ];
+    args.extend_from_slice(extra);
+    hmdist_ok(dir.path(), &args);
 }
 
 fn cache_args<'a>(out: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
@@ -332,40 +336,8 @@ fn an_oracle_or_a_reference_that_is_not_h_or_e_of_these_pixels_is_refused_by_wha
         );
     }
     // Renders of other pixels: another absorption, a shard's part, an image of H.
-    hmdist_ok(
-        dir.path(),
-        &[
-            "render",
-            "--quiet",
-            "--method",
-            "irradiance",
-            "--size",
-            SIZE,
-            "--rays",
-            "4",
-            "--absorption",
-            "0.5",
-            "--out",
-            "e-half.exr",
-        ],
-    );
-    hmdist_ok(
-        dir.path(),
-        &[
-            "render",
-            "--quiet",
-            "--method",
-            "irradiance",
-            "--size",
-            SIZE,
-            "--rays",
-            "4",
-            "--shard",
-            "0/2",
-            "--out",
-            "e-part.exr",
-        ],
-    );
+    irradiance_with(&dir, "e-half.exr", ("cube", SIZE, "4"), &["--absorption", "0.5"]);
+    irradiance_with(&dir, "e-part.exr", ("cube", SIZE, "4"), &["--shard", "0/2"]);
     for (name, says) in [
         ("e-half.exr", "absorption (Some(0.5) against Some(0.2))"),
         ("e-part.exr", "a shard's part (0/2 against a whole image)"),

@@ -312,7 +312,6 @@ fn not_the_same_pixels(report: &RenderReport, scene: &Scene, args: &CacheArgs, o
     differences
 }
 
-/// `value` as JSON text, to compare report parts that have no `PartialEq`.
 /// Whether the JSON file at `path` is a cache's report (`"method": "cache"`).
 fn made_by_cache(path: &Path) -> bool {
     let text = hmdist::files::read_text(path).unwrap_or_default();
@@ -320,6 +319,7 @@ fn made_by_cache(path: &Path) -> bool {
     value["method"] == "cache"
 }
 
+/// `value` as JSON text, to compare report parts that have no `PartialEq`.
 fn json(value: &impl serde::Serialize) -> String {
     serde_json::to_string(value).expect("a report part serialises")
 }

@@ -245,16 +245,11 @@ impl Runner<'_> {
             .ok()
             .and_then(|v| v.as_str().map(String::from))
             .unwrap_or_default();
-        let image = crate::report::KeyImage {
-            aovs: aovs.iter().map(|a| a.name().into()).collect(),
-            seed,
-            ..options.key_image()
-        };
         RenderKey::new(
             (&self.scene.name, self.scene_content),
             (estimator.method(), estimator.parameters()),
             options.bvh_quality.name(),
-            image,
+            options.key_image(),
         )
         .on(&backend, None)
     }
