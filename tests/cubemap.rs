@@ -55,9 +55,11 @@ fn perpendicular_box(h: f32) -> Scene {
             target: Vec3::ZERO,
             up: Vec3::Z,
             fov_y_deg: 30.0,
+            mirrored: false,
         },
         light: None,
         display_scale: 0.5 / h,
+        notes: Default::default(),
     }
 }
 

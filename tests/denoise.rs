@@ -155,9 +155,11 @@ fn step() -> Scene {
             target: Vec3::ZERO,
             up: Vec3::Z,
             fov_y_deg: 90.0,
+            mirrored: false,
         },
         light: None,
         display_scale: 0.5,
+        notes: Default::default(),
     }
 }
 

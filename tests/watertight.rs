@@ -144,9 +144,11 @@ fn a_ray_leaving_a_face_does_not_hit_its_coincident_duplicate() {
             target: centre,
             up: Vec3::Y,
             fov_y_deg: 10.0,
+            mirrored: false,
         },
         light: None,
         display_scale: 1.0,
+        notes: Default::default(),
     };
     // Gather rays from the face's own primary hits, many of them grazing (where the
     // duplicate's t falls within its error bound): every one must escape.

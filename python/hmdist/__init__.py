@@ -155,7 +155,8 @@ class Scene:
 
     @classmethod
     def load(cls, path: PathLike) -> Scene:
-        """A scene from a file: OBJ, PLY, glTF/GLB or a TOML scene description."""
+        """A scene from a file: OBJ, PLY, glTF/GLB, a TOML scene description, or a pbrt-v4
+        scene (`.pbrt`, `.pbrt.gz`) with its camera and film size."""
         return cls(_hmdist.Scene.load(os.fspath(path)))
 
     @classmethod
@@ -181,8 +182,9 @@ class Scene:
                aov: str | Iterable[str] | None = None, **params: Any) -> Any:
         """H per pixel (float32 [height, width]) and the report (a dict with the JSON
         sidecar's keys). `camera` defaults to the scene's own; `size=(w, h)` (default the
-        camera's, else 1024 × 1024) sets the image's size. `params` are `hmdist render`'s flags
-        with underscores: the render's own (size, seed, threads, max_distance, bvh) and the
+        camera's, else the scene file's own, as a pbrt Film's, else 1024 × 1024) sets the
+        image's size. `params` are `hmdist render`'s flags with underscores: the render's own
+        (size, seed, threads, max_distance, bvh) and the
         method's (gather: rays, weighting, rounds, ao_radius, backend; cubemap: cube_res, ...;
         photon1/photon2: photons, nearest (or its older name gather), source, photon_map, ...;
         irradiance: see `irradiance`). `denoise=True` filters H with its neighbours' rays
@@ -197,7 +199,7 @@ class Scene:
             raise ValueError(f"camera must be a hmdist.Camera, not {type(camera).__name__}")
         params = {name: _parameter(name, value) for name, value in params.items()}
         if camera is not None and "size" in params:
-            camera = Camera(camera.eye, camera.target, camera.up, camera.fov_y_deg, params.pop("size"))
+            camera = Camera(camera.eye, camera.target, camera.up, camera.fov_y_deg, params.pop("size"), camera.mirrored)
         names = [] if aov is None else ([aov] if isinstance(aov, str) else [str(a) for a in aov])
         image, report, aovs = self._inner.render(camera, method, params, bool(progress), names)
         return (image, report) if aov is None else (image, report, aovs)
@@ -226,7 +228,7 @@ class Scene:
             raise ValueError(f"camera must be a hmdist.Camera, not {type(camera).__name__}")
         params = {name: _parameter(name, value) for name, value in params.items()}
         if camera is not None and "size" in params:
-            camera = Camera(camera.eye, camera.target, camera.up, camera.fov_y_deg, params.pop("size"))
+            camera = Camera(camera.eye, camera.target, camera.up, camera.fov_y_deg, params.pop("size"), camera.mirrored)
         for clamp in ("clamp_pixels", "clamp_scene"):
             if params.get(clamp) is not None:
                 params[clamp] = tuple(float(v) for v in params[clamp])
@@ -245,12 +247,14 @@ class Scene:
         """Each pixel's first hit, row-major: a dict of `points`, `normals` (facing the
         camera) and `point_errors` (float32 [n, 3]; NaN for background) and `triangles`
         (int64 [n], -1 for background): what `hmd_at` needs to give the image's H exactly.
-        `size` (default the camera's, else 1024 × 1024) sets the image's size."""
+        `size` (default the camera's, else the scene file's own, else 1024 × 1024) sets the
+        image's size."""
         if camera is not None and not isinstance(camera, Camera):
             raise ValueError(f"camera must be a hmdist.Camera, not {type(camera).__name__}")
         if camera is not None and size is not None:
-            camera = Camera(camera.eye, camera.target, camera.up, camera.fov_y_deg, _size(size))
-        return self._inner.primary_hits(camera, DEFAULT_SIZE if size is None else _size(size))
+            camera = Camera(camera.eye, camera.target, camera.up, camera.fov_y_deg, _size(size), camera.mirrored)
+        default = self.info["size"] or DEFAULT_SIZE
+        return self._inner.primary_hits(camera, default if size is None else _size(size))
 
     def hmd_at(self, points: Vectors, normals: Vectors, rays: Count = DEFAULT_RAYS, seed: Count = DEFAULT_SEED,
                keys: npt.ArrayLike | None = None, weighting: str = "cosine",

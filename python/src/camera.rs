@@ -18,21 +18,24 @@ pub(crate) struct PyCamera {
 #[pymethods]
 impl PyCamera {
     /// `eye`, `target` and `up`: any 3 numbers (list, tuple, numpy array); `size`: any 2
-    /// positive integers (width, height).
+    /// positive integers (width, height); `mirrored`: the picture's right is `up × forward`
+    /// (a pbrt camera's).
     #[new]
-    #[pyo3(signature = (eye, target, up = None, fov_y_deg = 60.0, size = None))]
+    #[pyo3(signature = (eye, target, up = None, fov_y_deg = 60.0, size = None, mirrored = false))]
     fn new(
         eye: &Bound<'_, PyAny>,
         target: &Bound<'_, PyAny>,
         up: Option<&Bound<'_, PyAny>>,
         fov_y_deg: f32,
         size: Option<&Bound<'_, PyAny>>,
+        mirrored: bool,
     ) -> PyResult<Self> {
         let camera = Camera {
             eye: vec3("eye", eye)?,
             target: vec3("target", target)?,
             up: up.map_or(Ok(Vec3::Y), |up| vec3("up", up))?,
             fov_y_deg,
+            mirrored,
         };
         let size = match size {
             None => (512, 512),
@@ -85,6 +88,12 @@ impl PyCamera {
         shortest(self.camera.fov_y_deg)
     }
 
+    /// Whether the picture's right is `up × forward` rather than `forward × up`.
+    #[getter]
+    fn mirrored(&self) -> bool {
+        self.camera.mirrored
+    }
+
     /// The image it takes: (width, height).
     #[getter]
     fn size(&self) -> (u32, u32) {
@@ -94,7 +103,7 @@ impl PyCamera {
     /// For pickle: the constructor and its arguments.
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         let c = slf.borrow();
-        let args = (c.eye(), c.target(), c.up(), c.fov_y_deg(), c.size);
+        let args = (c.eye(), c.target(), c.up(), c.fov_y_deg(), c.size, c.mirrored());
         Ok((
             slf.get_type().into_any(),
             args.into_pyobject(slf.py())?.into_any(),
@@ -110,12 +119,13 @@ impl PyCamera {
     fn __repr__(&self) -> String {
         let c = &self.camera;
         format!(
-            "Camera(eye={:?}, target={:?}, up={:?}, fov_y_deg={}, size={:?})",
+            "Camera(eye={:?}, target={:?}, up={:?}, fov_y_deg={}, size={:?}{})",
             c.eye.to_array(),
             c.target.to_array(),
             c.up.to_array(),
             c.fov_y_deg,
-            self.size
+            self.size,
+            if c.mirrored { ", mirrored=True" } else { "" }
         )
     }
 }

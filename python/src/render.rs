@@ -38,8 +38,15 @@ impl PyScene {
         }
         let (estimator, mut options) = configure(method, params, &aovs)?;
         options.aovs = aovs;
-        if let Some(c) = &camera {
-            (options.width, options.height) = c.size;
+        match &camera {
+            Some(c) => (options.width, options.height) = c.size,
+            // A scene file's own size (a pbrt Film), where the call names none.
+            None if !params.contains("size")? => {
+                if let Some(size) = self.scene.notes.size {
+                    (options.width, options.height) = size;
+                }
+            }
+            None => {}
         }
         let scene = self.seen_by(camera.as_ref());
         let scene = scene.as_ref();

@@ -9,10 +9,13 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use hmdist::accel::{Accel, BuildQuality, Kernel};
-use hmdist::scene::{default_display_scale, framing_camera, Camera, Mesh};
+use hmdist::scene::{default_display_scale, framing_camera, Camera, Mesh, SceneNotes};
 
 use crate::camera::PyCamera;
 use crate::convert::{py_error, value_error, vectors};
+
+/// Counts by name, as [`SceneNotes`] keeps them.
+type Counts = Vec<(String, usize)>;
 
 /// A triangle scene, its camera and light, and its BVH once something casts rays. Read-only
 /// once built (`frozen`): any number of threads may render it at once.
@@ -59,7 +62,8 @@ impl PyScene {
 
 #[pymethods]
 impl PyScene {
-    /// A built-in scene (cube, hall, sphere, slab, dome) or a file (OBJ, PLY, glTF, GLB, TOML).
+    /// A built-in scene (cube, hall, sphere, slab, dome) or a file (OBJ, PLY, glTF, GLB, TOML,
+    /// pbrt-v4 `.pbrt`/`.pbrt.gz`, Mitsuba 3 `.xml`).
     #[staticmethod]
     fn load(py: Python<'_>, name_or_path: &str) -> PyResult<Self> {
         let name = name_or_path.to_string();
@@ -103,10 +107,12 @@ impl PyScene {
             camera: framing_camera(bounds),
             light: None,
             display_scale: default_display_scale(bounds),
+            notes: Default::default(),
         })
     }
 
-    /// Triangles, bounds, diagonal, camera, light and display scale.
+    /// Triangles, bounds, diagonal, camera, light, display scale, and what its file said: the
+    /// image `size` it asks for (or None), triangles by source, what was skipped, remarks.
     #[getter]
     fn info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let s = &self.scene;
@@ -121,6 +127,7 @@ impl PyScene {
         camera.set_item("target", s.camera.target.to_array())?;
         camera.set_item("up", s.camera.up.to_array())?;
         camera.set_item("fov_y_deg", s.camera.fov_y_deg)?;
+        camera.set_item("mirrored", s.camera.mirrored)?;
         info.set_item("camera", camera)?;
         let light = match s.light {
             Some(l) => {
@@ -134,11 +141,16 @@ impl PyScene {
         };
         info.set_item("light", light)?;
         info.set_item("display_scale", s.display_scale)?;
+        info.set_item("size", s.notes.size)?;
+        info.set_item("sources", s.notes.sources.clone())?;
+        info.set_item("skipped", s.notes.skipped.clone())?;
+        info.set_item("remarks", s.notes.remarks.clone())?;
         Ok(info)
     }
 
     /// For pickle: [`PyScene::from_state`] and the scene's name, vertices (float32 bytes),
-    /// faces (uint32 bytes), camera, light and display scale.
+    /// faces (uint32 bytes), camera, light, display scale and notes (size, sources, skipped,
+    /// remarks).
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         let py = slf.py();
         let s = &slf.get().scene;
@@ -162,6 +174,7 @@ impl PyScene {
             c.target.to_array(),
             c.up.to_array(),
             c.fov_y_deg,
+            c.mirrored,
         );
         let light = s.light.map(|l| {
             (
@@ -177,6 +190,12 @@ impl PyScene {
             camera,
             light,
             s.display_scale,
+            (
+                s.notes.size,
+                s.notes.sources.clone(),
+                s.notes.skipped.clone(),
+                s.notes.remarks.clone(),
+            ),
         );
         let from_state = slf.get_type().getattr("_from_state")?;
         Ok((from_state, args.into_pyobject(py)?.into_any()))
@@ -189,9 +208,10 @@ impl PyScene {
         name: String,
         positions: &[u8],
         indices: &[u8],
-        camera: ([f32; 3], [f32; 3], [f32; 3], f32),
+        camera: ([f32; 3], [f32; 3], [f32; 3], f32, bool),
         light: Option<([f32; 3], [f32; 3], f32)>,
         display_scale: f32,
+        notes: (Option<(u32, u32)>, Counts, Counts, Vec<String>),
     ) -> PyResult<Self> {
         let word = |b: &[u8]| -> [u8; 4] { [b[0], b[1], b[2], b[3]] };
         let floats: Vec<f32> = positions
@@ -206,12 +226,13 @@ impl PyScene {
             positions: floats.chunks_exact(3).map(Vec3::from_slice).collect(),
             indices: ints.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
         };
-        let (eye, target, up, fov_y_deg) = camera;
+        let (eye, target, up, fov_y_deg, mirrored) = camera;
         let camera = Camera {
             eye: eye.into(),
             target: target.into(),
             up: up.into(),
             fov_y_deg,
+            mirrored,
         };
         let light = light.map(
             |(position, direction, cone_half_angle_deg)| hmdist::scene::SpotLight {
@@ -226,6 +247,12 @@ impl PyScene {
             camera,
             light,
             display_scale,
+            notes: SceneNotes {
+                size: notes.0,
+                sources: notes.1,
+                skipped: notes.2,
+                remarks: notes.3,
+            },
         })
     }
 

@@ -511,3 +511,26 @@ def test_the_package_has_a_version_and_type_information() -> None:
     assert hmdist.__version__ == "0.1.0"
     package = Path(hmdist.__file__).parent
     assert (package / "py.typed").exists() and (package / "_hmdist.pyi").exists()
+
+
+def test_a_pbrt_scene_loads_with_its_film_size_and_mirrored_camera(tmp_path: Path) -> None:
+    # Issue #68: a pbrt-v4 file, its Film's size the default, its camera pbrt's (mirrored).
+    (tmp_path / "s.pbrt").write_text(
+        'LookAt 0 1 5  0 1 0  0 1 0\nCamera "perspective" "float fov" [45]\n'
+        'Film "rgb" "integer xresolution" [12] "integer yresolution" [8]\nWorldBegin\n'
+        'Shape "trianglemesh" "point3 P" [-5 0 -5 5 0 -5 5 0 5 -5 0 5] "integer indices" [0 1 2 0 2 3]\n'
+        'Shape "sphere"\nShape "curve" "point3 P" [0 0 0 1 1 1 2 2 2 3 3 3]\n')
+    s = hmdist.Scene.load(tmp_path / "s.pbrt")
+    info = s.info
+    assert info["size"] == (12, 8) and info["camera"]["mirrored"] is True
+    assert info["skipped"] == [("curve shape", 1)] and info["sources"][0] == ("trianglemesh", 2)
+    H, report = s.render(rays=4)
+    assert H.shape == (8, 12)
+    assert s.primary_hits()["triangles"].shape == (96,)
+    copy = pickle.loads(pickle.dumps(s))
+    assert copy.info == info
+    c = info["camera"]
+    cam = hmdist.Camera(c["eye"], c["target"], c["up"], c["fov_y_deg"], size=(12, 8), mirrored=True)
+    assert cam.mirrored and pickle.loads(pickle.dumps(cam)) == cam and "mirrored=True" in repr(cam)
+    same, _ = s.render(cam, rays=4)
+    assert np.array_equal(H.view(np.uint32), same.view(np.uint32))

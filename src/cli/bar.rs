@@ -26,6 +26,11 @@ impl Bar {
         Bar(bar)
     }
 
+    /// Prints a line on stderr above the bar (whether or not the bar is shown).
+    pub fn note(&self, line: &str) {
+        self.0.suspend(|| eprintln!("{line}"));
+    }
+
     /// Shows a one-line status (a phase without steps, such as loading).
     pub fn status(&self, message: &str) {
         self.0.set_length(0);

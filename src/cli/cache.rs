@@ -81,7 +81,7 @@ pub struct CacheArgs {
 
 pub fn run(args: CacheArgs) -> Result<()> {
     let params = args.params()?;
-    let options = hmdist::render::RenderOptions {
+    let mut options = hmdist::render::RenderOptions {
         max_distance: args.max_distance,
         ..args.image.options()?
     };
@@ -112,8 +112,10 @@ pub fn run(args: CacheArgs) -> Result<()> {
     let bar = Bar::new(args.quiet);
     bar.status("loading");
     let load_start = Instant::now();
-    let scene = Scene::load(&args.scene)?;
+    let scene = super::scene::load(&args.scene, &bar)?;
     let load_seconds = load_start.elapsed().as_secs_f64();
+    (options.width, options.height) = args.image.size_for(&scene);
+    options.validate()?;
     let size = (options.width, options.height);
     let oracle = args
         .oracle

@@ -7,9 +7,10 @@ use hmdist::error::Result;
 /// build` both take it (a photon map is built for the renders that will use it).
 #[derive(clap::Args)]
 pub struct ImageArgs {
-    /// Image size, WIDTHxHEIGHT.
-    #[arg(long, default_value_t = Size(hmdist::render::DEFAULT_SIZE), value_parser = parse_size)]
-    size: Size,
+    /// Image size, WIDTHxHEIGHT [default: the scene file's own (a pbrt Film, a Mitsuba film),
+    /// else 1024x1024].
+    #[arg(long, value_parser = parse_size)]
+    size: Option<Size>,
     /// Seed of the per-pixel random numbers: same seed, same image, whatever the thread count.
     #[arg(long, default_value_t = hmdist::render::DEFAULT_SEED)]
     seed: u64,
@@ -23,10 +24,13 @@ pub struct ImageArgs {
 
 impl ImageArgs {
     /// The library's render options for these flags, with the kernel `HMDIST_KERNEL` names.
+    /// Without `--size`, the size is [`hmdist::render::DEFAULT_SIZE`] until
+    /// [`ImageArgs::size_for`] gives the scene's own.
     pub fn options(&self) -> Result<hmdist::render::RenderOptions> {
+        let (width, height) = self.size.map_or(hmdist::render::DEFAULT_SIZE, |s| s.0);
         Ok(hmdist::render::RenderOptions {
-            width: self.size.0 .0,
-            height: self.size.0 .1,
+            width,
+            height,
             seed: self.seed,
             threads: self.threads,
             bvh_quality: self.bvh,
@@ -34,18 +38,20 @@ impl ImageArgs {
             ..Default::default()
         })
     }
-}
 
-/// An image size as `--size` spells it, `WIDTHxHEIGHT` (so that its default is the library's
-/// [`hmdist::render::DEFAULT_SIZE`], written once).
-#[derive(Clone, Copy, Debug)]
-struct Size((u32, u32));
-
-impl std::fmt::Display for Size {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}x{}", self.0 .0, self.0 .1)
+    /// `--size`, or else the size the scene's file asks for, or else the default: the image
+    /// size of a render of `scene`.
+    pub fn size_for(&self, scene: &hmdist::scene::Scene) -> (u32, u32) {
+        match self.size {
+            Some(size) => size.0,
+            None => scene.notes.size.unwrap_or(hmdist::render::DEFAULT_SIZE),
+        }
     }
 }
+
+/// An image size as `--size` spells it, `WIDTHxHEIGHT`.
+#[derive(Clone, Copy, Debug)]
+struct Size((u32, u32));
 
 /// `WIDTHxHEIGHT`, e.g. `1024x1024`.
 fn parse_size(s: &str) -> std::result::Result<Size, String> {

@@ -54,10 +54,11 @@ pub fn run(command: PhotonsCommand) -> Result<()> {
     let inputs: Vec<&std::path::Path> = scene_files.iter().map(|p| p.as_path()).collect();
     hmdist::files::check_output(&args.out, &inputs)?;
     let estimator = PhotonEstimator::new(method, args.params.clone())?;
-    let options = args.image.options()?;
+    let mut options = args.image.options()?;
     let bar = Bar::new(args.quiet);
     bar.status("loading");
-    let scene = Scene::load(&args.scene)?;
+    let scene = super::scene::load(&args.scene, &bar)?;
+    (options.width, options.height) = args.image.size_for(&scene);
     let start = std::time::Instant::now();
     let bytes = estimator.build_map_file(&scene, &options, &bar)?;
     write_atomically(&args.out, &bytes)?;

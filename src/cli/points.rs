@@ -97,7 +97,7 @@ pub fn run(args: PointsArgs) -> Result<()> {
         })
         .collect::<Result<Vec<_>>>()?;
     bar.status("loading");
-    let scene = Scene::load(&args.scene)?;
+    let scene = super::scene::load(&args.scene, &bar)?;
     scene.validate()?;
     bar.status("BVH");
     let rays = points.len() as u64 * args.rays as u64;

@@ -136,7 +136,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     aovs.dedup();
     let estimator = registry::method(&args.method)?.build_from_flags(&args.method_flags.0, &aovs)?;
-    let options = RenderOptions {
+    let mut options = RenderOptions {
         max_distance: args.max_distance,
         aovs,
         shard: args.shard,
@@ -171,8 +171,10 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let bar = Bar::new(args.quiet);
     bar.status("loading");
     let load_start = Instant::now();
-    let scene = Scene::load(&args.scene)?;
+    let scene = super::scene::load(&args.scene, &bar)?;
     let load_seconds = load_start.elapsed().as_secs_f64();
+    (options.width, options.height) = args.image.size_for(&scene);
+    options.validate()?;
     bar.status("BVH");
     let mut rendered = render(&scene, estimator.as_ref(), &options, &bar)?;
     rendered.report.add_load_seconds(load_seconds);

@@ -376,6 +376,9 @@ pub struct CameraReport {
     pub up: [f32; 3],
     /// Vertical field of view, degrees.
     pub fov_y_deg: f32,
+    /// The picture's right is `up × f` (a pbrt camera); written only where true.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub mirrored: bool,
 }
 
 /// A spot light.
@@ -405,6 +408,7 @@ impl From<&Camera> for CameraReport {
             target: camera.target.to_array(),
             up: camera.up.to_array(),
             fov_y_deg: camera.fov_y_deg,
+            mirrored: camera.mirrored,
         }
     }
 }

@@ -4,6 +4,11 @@
 //! `f = normalize(target − eye)`, `r = normalize(f × up)`, `u = r × f`; pixel (px, py), row 0 at
 //! the top, looks along `normalize(f + sx·r + sy·u)` with
 //! `sx = (2(px + ½)/W − 1) · tan(fov/2) · W/H` and `sy = (1 − 2(py + ½)/H) · tan(fov/2)`.
+//!
+//! A **mirrored** camera has `r = normalize(up × f)` instead (`u` unchanged): its picture is
+//! the other one's left for right. pbrt's cameras are such, unless their transform reflects
+//! (pbrt's camera space is left-handed: a `LookAt` alone gives a frame whose right is
+//! `up × f`); hmdist reads them so, and the picture is pbrt's.
 
 use glam::Vec3;
 
@@ -20,6 +25,8 @@ pub struct Camera {
     pub up: Vec3,
     /// Full vertical field of view, in degrees.
     pub fov_y_deg: f32,
+    /// Whether the picture's right is `up × f` rather than `f × up` (see the module docs).
+    pub mirrored: bool,
 }
 
 /// A camera prepared for one image size: the frame and scale factors of spec §2.
@@ -73,7 +80,7 @@ impl Camera {
         CameraRays {
             eye: self.eye,
             forward,
-            right,
+            right: if self.mirrored { -right } else { right },
             up: right.cross(forward),
             tan_half_fov: (0.5 * self.fov_y_deg.to_radians()).tan(),
             aspect: width as f32 / height as f32,

@@ -17,7 +17,7 @@ use std::path::Path;
 pub use camera::{Camera, CameraRays};
 pub use light::SpotLight;
 pub use mesh::{Bounds, Mesh};
-pub use model::{default_display_scale, framing_camera, stable_hash, stable_hash_of, Scene};
+pub use model::{default_display_scale, framing_camera, stable_hash, stable_hash_of, Scene, SceneNotes};
 
 use crate::error::Result;
 

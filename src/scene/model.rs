@@ -20,6 +20,62 @@ pub struct Scene {
     pub light: Option<SpotLight>,
     /// Grey level per unit of H in pictures: grey = clamp(display_scale · H) (spec §4).
     pub display_scale: f32,
+    /// What the scene's file said besides (its image size) and what was made of it (where
+    /// the triangles came from, what was skipped). Not part of the [`Scene::fingerprint`].
+    pub notes: SceneNotes,
+}
+
+/// What loading a scene file found beyond triangles, camera and light: the image size the
+/// file asks for, the triangles by their source, and what was read and not used. Empty for
+/// built-in scenes and for mesh files.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SceneNotes {
+    /// The image size, (width, height), the file renders at (pbrt's `Film`, Mitsuba's
+    /// `<film>`): the size of a render that names none.
+    pub size: Option<(u32, u32)>,
+    /// Triangles by where they came from ("trianglemesh", "plymesh geometry/bunny.ply",
+    /// "sphere", ...), in the order first met.
+    pub sources: Vec<(String, usize)>,
+    /// Things read and not used (a `curve` shape, an `infinite` light), by kind, with counts,
+    /// in the order first met.
+    pub skipped: Vec<(String, usize)>,
+    /// Other things the user should know, once each ("2 object instances flattened").
+    pub remarks: Vec<String>,
+}
+
+impl SceneNotes {
+    /// Counts `triangles` more for `source`.
+    pub fn add_source(&mut self, source: &str, triangles: usize) {
+        add_count(&mut self.sources, source, triangles);
+    }
+
+    /// Counts one more skipped `kind`.
+    pub fn skip(&mut self, kind: &str) {
+        add_count(&mut self.skipped, kind, 1);
+    }
+
+    /// Adds a remark, unless it is already there.
+    pub fn remark(&mut self, remark: impl Into<String>) {
+        let remark = remark.into();
+        if !self.remarks.contains(&remark) {
+            self.remarks.push(remark);
+        }
+    }
+
+    /// The skipped things as one line ("2 curve shapes, 1 infinite light"); `None` if none.
+    pub fn skipped_line(&self) -> Option<String> {
+        (!self.skipped.is_empty()).then(|| {
+            let parts: Vec<String> = self.skipped.iter().map(|(k, n)| format!("{n} × {k}")).collect();
+            parts.join(", ")
+        })
+    }
+}
+
+fn add_count(counts: &mut Vec<(String, usize)>, key: &str, n: usize) {
+    match counts.iter_mut().find(|(k, _)| k == key) {
+        Some((_, count)) => *count += n,
+        None => counts.push((key.to_string(), n)),
+    }
 }
 
 impl Scene {
@@ -57,10 +113,12 @@ impl Scene {
             floats.extend(l.position.to_array().into_iter().chain(l.direction.to_array()));
             floats.push(l.cone_half_angle_deg);
         }
+        // A mirrored camera adds a word; an unmirrored one leaves every older fingerprint as it was.
         let words = floats
             .iter()
             .map(|f| f.to_bits())
             .chain([self.light.is_some() as u32])
+            .chain(self.camera.mirrored.then_some(u32::from_le_bytes(*b"mirr")))
             .chain(self.mesh.indices.iter().flatten().copied());
         stable_hash_of(words.flat_map(u32::to_le_bytes))
     }
@@ -90,6 +148,7 @@ pub fn framing_camera(bounds: Bounds) -> Camera {
         target: center,
         up: glam::Vec3::Y,
         fov_y_deg: 50.0,
+        mirrored: false,
     }
 }
 

@@ -185,9 +185,11 @@ pub fn floor(half_width: f32, eye_height: f32) -> Scene {
             target: Vec3::ZERO,
             up: Vec3::Z,
             fov_y_deg: 60.0,
+            mirrored: false,
         },
         light: None,
         display_scale: 0.25,
+        notes: Default::default(),
     }
 }
 

@@ -25,6 +25,10 @@ pub(super) enum Format {
     Ply,
     Gltf,
     SceneToml,
+    /// pbrt-v4, `.pbrt` or `.pbrt.gz`.
+    Pbrt,
+    /// Mitsuba 3 XML, `.xml`.
+    Mitsuba,
 }
 
 pub(super) fn format_of(path: &Path) -> Result<Format> {
@@ -38,16 +42,47 @@ pub(super) fn format_of(path: &Path) -> Result<Format> {
         "ply" => Ok(Format::Ply),
         "gltf" | "glb" => Ok(Format::Gltf),
         "toml" => Ok(Format::SceneToml),
+        "pbrt" => Ok(Format::Pbrt),
+        "gz" if lower_name(path).ends_with(".pbrt.gz") => Ok(Format::Pbrt),
+        "xml" => Ok(Format::Mitsuba),
         _ => {
             let format = if ext.is_empty() {
                 "no extension".to_string()
             } else {
                 format!("'.{ext}'")
             };
-            let message = format!("unknown scene format {format}: expected .obj, .ply, .gltf, .glb or .toml");
+            let message = format!("unknown scene format {format}: expected .obj, .ply, .gltf, .glb, .toml, .pbrt, .pbrt.gz or .xml (Mitsuba 3)");
             Err(Error::file(path, message))
         }
     }
+}
+
+/// The file's name in lower case.
+fn lower_name(path: &Path) -> String {
+    path.file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default()
+}
+
+/// The most a gzipped file may hold once inflated.
+pub(super) const MAX_INFLATED: u64 = 4 << 30;
+
+/// `bytes`, inflated where the file's name ends `.gz` (pbrt's rule for scenes and PLY
+/// meshes), as they are otherwise.
+pub(super) fn gunzip_if_named(path: &Path, bytes: &[u8]) -> Result<Vec<u8>> {
+    if !lower_name(path).ends_with(".gz") {
+        return Ok(bytes.to_vec());
+    }
+    use std::io::Read;
+    let mut inflated = Vec::new();
+    flate2::read::MultiGzDecoder::new(bytes)
+        .take(MAX_INFLATED + 1)
+        .read_to_end(&mut inflated)
+        .map_err(|e| Error::file(path, format!("not a readable gzip file: {e}")))?;
+    if inflated.len() as u64 > MAX_INFLATED {
+        return Err(Error::file(path, "inflates to more than 4 GiB"));
+    }
+    Ok(inflated)
 }
 
 /// The name a scene loaded from `path` goes by in reports: its file name.

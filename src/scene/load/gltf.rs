@@ -199,6 +199,7 @@ fn visit(
                 target: origin + forward,
                 up: world.transform_vector3(Vec3::Y).normalize_or_zero(),
                 fov_y_deg: perspective.yfov().to_degrees(),
+                mirrored: false,
             });
         }
     }

@@ -19,10 +19,10 @@ pub fn load_mesh_bytes(path: &Path, bytes: &[u8]) -> Result<MeshFile> {
         Format::Obj => obj::load(path, bytes)?,
         Format::Ply => ply::load(path, bytes)?,
         Format::Gltf => gltf::load(path, bytes)?,
-        Format::SceneToml => {
+        Format::SceneToml | Format::Pbrt | Format::Mitsuba => {
             return Err(Error::file(
                 path,
-                "a TOML scene description cannot be used as a mesh: expected .obj, .ply, .gltf or .glb",
+                "a scene description (TOML, pbrt, Mitsuba) cannot be used as a mesh: expected .obj, .ply, .gltf or .glb",
             ))
         }
     };

@@ -13,10 +13,12 @@
 //! bytes, already read (the fuzz targets in `fuzz/` call them); the path then gives the
 //! format, the name in errors and the folder of the files the file refers to.
 
+mod assembly;
 mod common;
 mod gltf;
 mod meshes;
 mod obj;
+mod pbrt;
 mod ply;
 mod toml;
 
@@ -40,6 +42,7 @@ pub fn load_file(path: &Path) -> Result<Scene> {
 pub fn load_bytes(path: &Path, bytes: &[u8]) -> Result<Scene> {
     let scene = match format_of(path)? {
         Format::SceneToml => toml::load_scene(path, bytes)?,
+        Format::Pbrt => pbrt::load(path, bytes)?,
         _ => {
             let file = load_mesh_bytes(path, bytes)?;
             let bounds = file.mesh.bounds();
@@ -48,6 +51,7 @@ pub fn load_bytes(path: &Path, bytes: &[u8]) -> Result<Scene> {
                 camera: file.camera.unwrap_or_else(|| framing_camera(bounds)),
                 light: file.light,
                 display_scale: default_display_scale(bounds),
+                notes: Default::default(),
                 mesh: file.mesh,
             }
         }
@@ -60,8 +64,14 @@ pub fn load_bytes(path: &Path, bytes: &[u8]) -> Result<Scene> {
 /// meshes (as far as the file can be read; a file that cannot fails its load anyway).
 pub fn files_read(path: &Path) -> Vec<std::path::PathBuf> {
     let mut files = vec![path.to_path_buf()];
-    if let (Ok(Format::SceneToml), Ok(bytes)) = (format_of(path), read_bytes(path)) {
-        files.extend(toml::mesh_paths(path, &bytes));
+    match format_of(path) {
+        Ok(Format::SceneToml) => {
+            if let Ok(bytes) = read_bytes(path) {
+                files.extend(toml::mesh_paths(path, &bytes));
+            }
+        }
+        Ok(Format::Pbrt) => return pbrt::files_read(path),
+        _ => {}
     }
     files
 }

@@ -159,6 +159,7 @@ pub(super) fn load_scene(path: &Path, bytes: &[u8]) -> Result<Scene> {
                 target: Vec3::from(c.target),
                 up: c.up.map_or(Vec3::Y, Vec3::from),
                 fov_y_deg: c.fov_y_deg,
+                mirrored: false,
             };
             camera
                 .validate()
@@ -191,6 +192,7 @@ pub(super) fn load_scene(path: &Path, bytes: &[u8]) -> Result<Scene> {
         camera,
         light,
         display_scale,
+        notes: Default::default(),
     })
 }
 
@@ -234,12 +236,14 @@ fn spot_light(entry: &LightEntry) -> std::result::Result<SpotLight, String> {
     })
 }
 
+/// The camera moved with its mesh; a reflecting placement (a negative scale) mirrors its picture.
 fn move_camera(camera: Camera, transform: Affine3A) -> Camera {
     Camera {
         eye: transform.transform_point3(camera.eye),
         target: transform.transform_point3(camera.target),
         up: transform.transform_vector3(camera.up).normalize_or_zero(),
         fov_y_deg: camera.fov_y_deg,
+        mirrored: camera.mirrored ^ (transform.matrix3.determinant() < 0.0),
     }
 }
 

@@ -52,6 +52,7 @@ pub fn cube() -> Scene {
             target: Vec3::new(0.0, 1.6, -1.6),
             up: Vec3::Y,
             fov_y_deg: 60.0,
+            mirrored: false,
         },
         light: Some(SpotLight {
             position: Vec3::new(0.0, ROOM.max.y - 0.2, 0.0),
@@ -59,6 +60,7 @@ pub fn cube() -> Scene {
             cone_half_angle_deg: 55.0,
         }),
         display_scale: DISPLAY_SCALE,
+        notes: Default::default(),
     }
 }
 

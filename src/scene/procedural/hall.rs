@@ -63,6 +63,7 @@ pub fn hall() -> Scene {
             target: Vec3::new(0.0, 2.0, 4.0),
             up: Vec3::Y,
             fov_y_deg: 60.0,
+            mirrored: false,
         },
         light: Some(SpotLight {
             position: Vec3::new(0.0, 11.0, 17.0),
@@ -70,6 +71,7 @@ pub fn hall() -> Scene {
             cone_half_angle_deg: 18.0,
         }),
         display_scale: DISPLAY_SCALE,
+        notes: Default::default(),
     }
 }
 

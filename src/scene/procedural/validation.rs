@@ -34,6 +34,7 @@ pub fn sphere(radius: f32, subdivisions: u32) -> Scene {
             target: Vec3::new(0.0, -0.2, -1.0),
             up: Vec3::Y,
             fov_y_deg: 90.0,
+            mirrored: false,
         },
         light: Some(crate::scene::SpotLight {
             position: Vec3::new(0.0, 0.8 * radius, 0.0),
@@ -41,6 +42,7 @@ pub fn sphere(radius: f32, subdivisions: u32) -> Scene {
             cone_half_angle_deg: 60.0,
         }),
         display_scale: 0.5 / radius,
+        notes: Default::default(),
     }
 }
 
@@ -67,9 +69,11 @@ pub fn slab(height: f32, half_width: f32) -> Scene {
             target: Vec3::ZERO,
             up: Vec3::Z,
             fov_y_deg: 60.0,
+            mirrored: false,
         },
         light: None,
         display_scale: 0.25 / height,
+        notes: Default::default(),
     }
 }
 
@@ -113,6 +117,7 @@ pub fn dome(radius: f32, segments: u32, rings: u32) -> Scene {
             target: Vec3::ZERO,
             up: Vec3::Z,
             fov_y_deg: 60.0,
+            mirrored: false,
         },
         light: Some(crate::scene::SpotLight {
             position: Vec3::new(0.0, 0.9 * radius, 0.0),
@@ -120,5 +125,6 @@ pub fn dome(radius: f32, segments: u32, rings: u32) -> Scene {
             cone_half_angle_deg: 60.0,
         }),
         display_scale: 0.25 / radius,
+        notes: Default::default(),
     }
 }
