@@ -316,13 +316,17 @@ fn quadrics_are_closed_and_within_their_chord_error() {
 #[test]
 fn bad_files_name_the_file_line_and_directive() {
     let dir = Scratch::new("pbrt-bad");
-    let cases: [(&str, &str); 8] = [
+    let cases: [(&str, &str); 9] = [
         ("WorldBegin\n\nFrobnicate 1 2\n", "bad.pbrt:3: unknown directive 'Frobnicate'"),
         ("Translate 1 2\nWorldBegin\n", "bad.pbrt:2: Translate: 'WorldBegin' is not a number"),
         ("WorldBegin\nShape \"trianglemesh\" \"integer indices\" [0 1 2]\n", "bad.pbrt:2: Shape \"trianglemesh\": no \"point3 P\""),
         ("WorldBegin\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0 1 1 1]\n  \"integer indices\" [0 1 7]\n", "bad.pbrt:3: Shape \"trianglemesh\": index 7, but there are 4 points"),
         ("WorldBegin\nInclude \"nowhere/x.pbrt\"\n", "bad.pbrt:2: Include \"nowhere/x.pbrt\" (looked for "),
         ("WorldBegin\nShape \"plymesh\" \"string filename\" \"gone.ply\"\n", "bad.pbrt:2: Shape \"plymesh\" \"gone.ply\" (looked for "),
+        (
+            "WorldBegin\nShape \"loopsubdiv\" \"integer levels\" 16 \"point3 P\" [0 0 0 1 0 0 0 1 0]\n",
+            "bad.pbrt:2: Shape \"loopsubdiv\": 16 levels of 1 triangles is more than hmdist subdivides",
+        ),
         ("WorldBegin\nAttributeEnd\n", "bad.pbrt:2: AttributeEnd without a matching begin"),
         ("Camera \"perspective\" \"float fov\" [200]\nWorldBegin\nShape \"sphere\"\n", "bad.pbrt:1: Camera \"perspective\": fov must be in (0, 180), not 200"),
     ];

@@ -517,7 +517,7 @@ impl Reader {
                         let count = indices.len() as u64 / 3;
                         if !(0.0..=16.0).contains(&levels)
                             || levels.fract() != 0.0
-                            || count << (2 * levels as u64) > MAX_SUBDIVIDED
+                            || count.saturating_mul(1 << (2 * levels as u64)) > MAX_SUBDIVIDED
                         {
                             return Err(Failure::Here((params.line_of("levels", line), format!("Shape \"loopsubdiv\": {levels} levels of {count} triangles is more than hmdist subdivides (at most {MAX_SUBDIVIDED} triangles)"))));
                         }
