@@ -2,7 +2,8 @@
 //! instances, PLY meshes, gzip) equal the same geometry placed through OBJ + TOML; the camera
 //! puts a world point at the pixel pbrt's own projection (written out here from pbrt's
 //! definitions, not hmdist's camera) gives; quadrics are closed and within their chord
-//! error; bad files name the file and line.
+//! error; a real scene (pbrt-v4-scenes' killeroo, with its `loopsubdiv` mesh) loads; bad files
+//! name the file and line.
 
 mod common;
 
@@ -311,6 +312,59 @@ fn quadrics_are_closed_and_within_their_chord_error() {
     for (_, n) in &scene.notes.sources {
         assert!(*n > 0);
     }
+}
+
+/// pbrt-v4-scenes' killeroo-simple (tests/data/pbrt/killeroos, unmodified): two killeroos,
+/// each a `loopsubdiv` of one level, a floor and a wall, a sphere light; its camera; its film.
+#[test]
+fn the_killeroo_scene_loads_with_its_camera_and_film() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/pbrt/killeroos/killeroo-simple.pbrt");
+    let scene = load_file(&path).unwrap();
+    let notes = &scene.notes;
+    assert_eq!(notes.size, Some((700, 700)));
+    let base = {
+        let text = std::fs::read_to_string(path.with_file_name("geometry/killeroo.pbrt")).unwrap();
+        let start = text.find("\"integer indices\"").unwrap();
+        let list = &text[start..];
+        let list = &list[list.find('[').unwrap() + 1..list.find(']').unwrap()];
+        list.split_whitespace().count() / 3
+    };
+    let killeroos = notes.sources.iter().find(|(s, _)| s == "loopsubdiv").unwrap().1;
+    assert_eq!(
+        killeroos,
+        2 * 4 * base,
+        "one level of Loop subdivision: four times the triangles"
+    );
+    assert_eq!(
+        notes.sources.iter().find(|(s, _)| s == "trianglemesh").unwrap().1,
+        4
+    );
+    // The file: LookAt 400 20 30  0 63 -110  0 0 1, then Rotate -5 0 0 1, then Camera
+    // "perspective" "float fov" [39] on a square film.
+    let camera_from_world = pbrt_look_at(
+        DVec3::new(400.0, 20.0, 30.0),
+        DVec3::new(0.0, 63.0, -110.0),
+        DVec3::Z,
+    ) * DMat4::from_axis_angle(DVec3::Z, (-5f64).to_radians());
+    let world_from_camera = camera_from_world.inverse();
+    let c = &scene.camera;
+    assert!(c.mirrored);
+    // The Rotate comes after LookAt, so it turns the world first: the eye is (400, 20, 30)
+    // turned 5° about +z.
+    let eye = world_from_camera.transform_point3(DVec3::ZERO).as_vec3();
+    assert!((c.eye - eye).length() < 1e-3 && (eye - Vec3::new(400.0, 20.0, 30.0)).length() > 30.0);
+    let forward = world_from_camera
+        .transform_vector3(DVec3::Z)
+        .normalize()
+        .as_vec3();
+    let up = world_from_camera
+        .transform_vector3(DVec3::Y)
+        .normalize()
+        .as_vec3();
+    assert!(((c.target - c.eye).normalize() - forward).length() < 1e-5);
+    assert!((c.up.normalize() - up).length() < 1e-5, "{} against {up}", c.up);
+    assert!((c.fov_y_deg - 39.0).abs() < 1e-4);
 }
 
 #[test]
