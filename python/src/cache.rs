@@ -72,15 +72,8 @@ impl PyScene {
             serde_json::to_value(irradiance.parameters()).map_err(|e| value_error(e.to_string()))?;
         cache_params.irradiance =
             serde_json::from_value(parameters).map_err(|e| value_error(e.to_string()))?;
-        match &camera {
-            Some(c) => (options.width, options.height) = c.size,
-            // A scene file's own size (a pbrt Film), where the call names none.
-            None if !rest.contains("size")? => {
-                if let Some(size) = self.scene.notes.size {
-                    (options.width, options.height) = size;
-                }
-            }
-            None => {}
+        if let Some(size) = self.size_for(camera.as_ref(), rest.contains("size")?) {
+            (options.width, options.height) = size;
         }
         let image = |a: &PyReadonlyArray2<'py, f32>| -> PyResult<HmdImage> {
             let (h, w) = (a.shape()[0], a.shape()[1]);

@@ -38,15 +38,8 @@ impl PyScene {
         }
         let (estimator, mut options) = configure(method, params, &aovs)?;
         options.aovs = aovs;
-        match &camera {
-            Some(c) => (options.width, options.height) = c.size,
-            // A scene file's own size (a pbrt Film), where the call names none.
-            None if !params.contains("size")? => {
-                if let Some(size) = self.scene.notes.size {
-                    (options.width, options.height) = size;
-                }
-            }
-            None => {}
+        if let Some(size) = self.size_for(camera.as_ref(), params.contains("size")?) {
+            (options.width, options.height) = size;
         }
         let scene = self.seen_by(camera.as_ref());
         let scene = scene.as_ref();

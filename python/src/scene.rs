@@ -46,6 +46,17 @@ impl PyScene {
         }
     }
 
+    /// The image size a call renders at where it is not the one `size=` names: the camera's,
+    /// else (no `size=` either) the scene file's own, as a pbrt Film's; `None` leaves it to
+    /// the keywords.
+    pub(crate) fn size_for(&self, camera: Option<&PyCamera>, size_named: bool) -> Option<(u32, u32)> {
+        match camera {
+            Some(c) => Some(c.size),
+            None if !size_named => self.scene.notes.size,
+            None => None,
+        }
+    }
+
     /// The BVH for `hmd_at` and `cast`, built (without the GIL) at the first call.
     pub(crate) fn accel(&self, py: Python<'_>) -> PyResult<&Accel> {
         if let Some(accel) = self.accel.get() {

@@ -653,30 +653,33 @@ impl Reader {
             .as_ref()
             .is_some_and(|(p, _)| p.has("cropwindow") || p.has("pixelbounds"));
         let Reader {
-            assembly,
+            mut assembly,
             camera,
             light,
             instances,
             ..
         } = self;
         let bounds = assembly.bounds();
-        let mut notes_to_add = vec![];
         if cropped {
-            notes_to_add.push(
-                "the film's cropwindow/pixelbounds is not applied: the whole picture is rendered".to_string(),
-            );
+            assembly
+                .notes
+                .remark("the film's cropwindow/pixelbounds is not applied: the whole picture is rendered");
         }
         if instances > 0 {
             let s = if instances == 1 { "" } else { "s" };
-            notes_to_add.push(format!("{instances} object instance{s} flattened into the mesh"));
+            assembly
+                .notes
+                .remark(format!("{instances} object instance{s} flattened into the mesh"));
         }
         let camera = match camera {
             None => {
-                notes_to_add.push("no Camera: a camera framing the scene is used".into());
+                assembly
+                    .notes
+                    .remark("no Camera: a camera framing the scene is used");
                 framing_camera(bounds)
             }
             Some(c) if c.kind != "perspective" => {
-                notes_to_add.push(format!(
+                assembly.notes.remark(format!(
                     "a \"{}\" camera is not a pinhole: a camera framing the scene is used",
                     c.kind
                 ));
@@ -684,17 +687,15 @@ impl Reader {
             }
             Some(c) => {
                 if c.params.number("lensradius", 0.0).unwrap_or(0.0) > 0.0 {
-                    notes_to_add
-                        .push("depth of field (lensradius) is not applied: the camera is a pinhole".into());
+                    assembly
+                        .notes
+                        .remark("depth of field (lensradius) is not applied: the camera is a pinhole");
                 }
                 perspective(&c, film)
                     .map_err(|(l, m)| Error::file_line(&c.file, l, format!("Camera \"perspective\": {m}")))?
             }
         };
         let (mesh, mut notes) = assembly.finish().map_err(|e| super::common::in_file(path, e))?;
-        for remark in notes_to_add {
-            notes.remark(remark);
-        }
         notes.size = Some(film);
         let bounds = mesh.bounds();
         Ok(Scene {
