@@ -264,6 +264,46 @@ fn no_output_lands_on_an_input_a_device_or_what_a_failed_run_would_replace() {
     assert!(left.is_empty(), "no temporary or partial output: {left:?}");
 }
 
+/// Asserts that `hmdist ARGS`, one of whose outputs is `read` (a file it reads), is refused
+/// as one that would overwrite it (exit 2) and leaves `read` holding `before`.
+fn refused_unchanged(dir: &std::path::Path, args: &[&str], read: &str, before: &[u8]) {
+    let out = hmdist(dir, args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+    assert!(stderr.contains("would overwrite it"), "{args:?}: {stderr}");
+    assert_eq!(
+        std::fs::read(dir.join(read)).unwrap(),
+        before,
+        "{args:?}: {read} changed"
+    );
+}
+
+/// The files `hmdist ARGS` reads in `dir`, as the code that opens them logs them
+/// (`HMDIST_READS`), each once; the command must succeed.
+fn files_read_by(dir: &std::path::Path, args: &[&str]) -> Vec<String> {
+    let log = dir.join("reads.log");
+    let _ = std::fs::remove_file(&log);
+    let out = Command::new(env!("CARGO_BIN_EXE_hmdist"))
+        .args(args)
+        .current_dir(dir)
+        .env("HMDIST_READS", &log)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut reads: Vec<String> = std::fs::read_to_string(&log)
+        .unwrap_or_default()
+        .lines()
+        .map(String::from)
+        .collect();
+    reads.sort();
+    reads.dedup();
+    reads
+}
+
 /// The promise above as a property: for every command that writes, the files it reads are
 /// found by the code that opens them (`HMDIST_READS` logs each path read), and each of them
 /// named as each of the command's outputs is refused, exit 2, and left as it was.
@@ -424,32 +464,13 @@ fn no_command_writes_over_any_file_it_reads() {
         }
         args
     };
-    let log = dir.join("reads.log");
     let mut refusals = 0;
     for (template, outputs) in cases {
         let args = with_scene(template);
         let name = args[..2].join(" ");
         // The files the command reads, as it reads them.
-        let _ = std::fs::remove_file(&log);
         let run: Vec<&str> = args.iter().map(|a| fresh(a)).collect();
-        let out = Command::new(env!("CARGO_BIN_EXE_hmdist"))
-            .args(&run)
-            .current_dir(dir.path())
-            .env("HMDIST_READS", &log)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{run:?}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let mut reads: Vec<String> = std::fs::read_to_string(&log)
-            .unwrap_or_default()
-            .lines()
-            .map(String::from)
-            .collect();
-        reads.sort();
-        reads.dedup();
+        let reads = files_read_by(dir.path(), &run);
         if args.iter().any(|a| a == "s.toml") {
             for mesh in ["s.toml", "floor.obj", "box.ply"] {
                 assert!(
@@ -467,20 +488,90 @@ fn no_command_writes_over_any_file_it_reads() {
                     .iter()
                     .map(|a| if a == output { read.as_str() } else { fresh(a) })
                     .collect();
-                let out = hmdist(dir.path(), &run);
-                let stderr = String::from_utf8_lossy(&out.stderr);
-                assert_eq!(out.status.code(), Some(2), "{run:?}: {stderr}");
-                assert!(stderr.contains("would overwrite it"), "{run:?}: {stderr}");
-                assert_eq!(
-                    std::fs::read(dir.path().join(read)).unwrap(),
-                    before,
-                    "{run:?}: {read} changed"
-                );
+                refused_unchanged(dir.path(), &run, read, &before);
                 refusals += 1;
             }
         }
     }
     assert!(refusals >= 60, "{refusals} refusals");
+}
+
+/// The same for pbrt-v4 and Mitsuba 3 scenes, whose files name other files (includes, meshes):
+/// every file a render reads (as `HMDIST_READS` logs it) is one of the scene's, and each named
+/// as the render's EXR, PNG or JSON is refused, exit 2, and left as it was.
+#[test]
+fn pbrt_and_mitsuba_scenes_refuse_every_file_they_read_as_an_output() {
+    let dir = Scratch::new("cli-reads-scene-formats");
+    std::fs::create_dir_all(dir.join("geometry")).unwrap();
+    let obj = "v -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\nf 1 2 3\nf 1 3 4\n";
+    let ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+               property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+               -0.5 1 -0.5\n0.5 1 -0.5\n0 1 0.5\n3 0 1 2\n";
+    dir.write("geometry/floor.obj", obj);
+    dir.write("geometry/box.ply", ply);
+    dir.write(
+        "geometry/part.pbrt",
+        "Shape \"plymesh\" \"string filename\" \"geometry/box.ply\"\n",
+    );
+    dir.write(
+        "s.pbrt",
+        "LookAt 0 3 6  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 50\nWorldBegin\n\
+         Shape \"trianglemesh\" \"point3 P\" [-2 0 -2 2 0 -2 2 0 2 -2 0 2] \"integer indices\" [0 1 2 0 2 3]\n\
+         Include \"geometry/part.pbrt\"\n",
+    );
+    dir.write(
+        "geometry/part.xml",
+        "<scene version=\"3.0.0\"><shape type=\"ply\"><string name=\"filename\" value=\"box.ply\"/></shape></scene>\n",
+    );
+    dir.write(
+        "s.xml",
+        "<scene version=\"3.0.0\"><path value=\"geometry\"/>\n\
+         <sensor type=\"perspective\"><transform name=\"to_world\"><lookat origin=\"0 3 6\" target=\"0 0 0\" up=\"0 1 0\"/></transform></sensor>\n\
+         <shape type=\"obj\"><string name=\"filename\" value=\"floor.obj\"/></shape>\n\
+         <include filename=\"part.xml\"/></scene>\n",
+    );
+    for (scene, files) in [
+        (
+            "s.pbrt",
+            &["s.pbrt", "geometry/part.pbrt", "geometry/box.ply"][..],
+        ),
+        (
+            "s.xml",
+            &[
+                "s.xml",
+                "geometry/part.xml",
+                "geometry/floor.obj",
+                "geometry/box.ply",
+            ][..],
+        ),
+    ] {
+        let args = |out: &str, png: &str, json: &str| -> Vec<String> {
+            [
+                "render", "--quiet", "--scene", scene, "--size", "8x8", "--rays", "4", "--out", out, "--png",
+                png, "--json", json,
+            ]
+            .map(String::from)
+            .to_vec()
+        };
+        let run = args("new.exr", "new.png", "new.json");
+        let reads = files_read_by(dir.path(), &run.iter().map(String::as_str).collect::<Vec<_>>());
+        for file in files {
+            assert!(
+                reads.iter().any(|r| r.ends_with(file)),
+                "{scene}: {file} not among the reads {reads:?}"
+            );
+        }
+        for read in &reads {
+            let before = std::fs::read(dir.path().join(read)).unwrap();
+            for slot in 0..3 {
+                let mut names = ["new.exr", "new.png", "new.json"];
+                names[slot] = read.as_str();
+                let run = args(names[0], names[1], names[2]);
+                let run: Vec<&str> = run.iter().map(String::as_str).collect();
+                refused_unchanged(dir.path(), &run, read, &before);
+            }
+        }
+    }
 }
 
 #[test]

@@ -9,7 +9,7 @@ mod common;
 
 use std::io::Write;
 
-use common::Scratch;
+use common::{assert_same_triangles, Scratch, TRI_OBJ as OBJ, TRI_PLY as PLY};
 use glam::{DMat4, DVec3, Vec3};
 use hmdist::accel::{Accel, BuildQuality};
 use hmdist::scene::load::load_file;
@@ -17,36 +17,9 @@ use hmdist::scene::Scene;
 
 /// Every triangle's corners, each triangle's corners sorted and the list sorted: the same for
 /// any vertex numbering and triangle order.
-fn triangle_set(scene: &Scene) -> Vec<[[f32; 3]; 3]> {
-    let key = |p: Vec3| [p.x, p.y, p.z];
-    let mut set: Vec<[[f32; 3]; 3]> = (0..scene.mesh.triangle_count())
-        .map(|i| {
-            let mut t = scene.mesh.triangle(i).map(key);
-            t.sort_by(|a, b| a.partial_cmp(b).unwrap());
-            t
-        })
-        .collect();
-    set.sort_by(|a, b| a.partial_cmp(b).unwrap());
-    set
-}
 
-fn assert_same_triangles(a: &Scene, b: &Scene, tolerance: f32) {
-    let (a, b) = (triangle_set(a), triangle_set(b));
-    assert_eq!(a.len(), b.len(), "triangle counts differ");
-    for (s, t) in a.iter().zip(&b) {
-        for (p, q) in s.iter().zip(t) {
-            let d = Vec3::from(*p) - Vec3::from(*q);
-            assert!(d.length() <= tolerance, "{p:?} != {q:?}");
-        }
-    }
-}
-
-const OBJ: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0.5\nv 0.3 0.2 2\nf 1 2 3\nf 1 3 4\nf 2 5 3\n";
 const PBRT_MESH: &str =
     r#""point3 P" [0 0 0 1 0 0 1 1 0 0 1 0.5 0.3 0.2 2] "integer indices" [0 1 2 0 2 3 1 4 2]"#;
-const PLY: &str = "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n\
-    element face 3\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0.5\n0.3 0.2 2\n\
-    3 0 1 2\n3 0 2 3\n3 1 4 2\n";
 
 fn gzip(bytes: &[u8]) -> Vec<u8> {
     let mut encoder = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());

@@ -155,8 +155,9 @@ class Scene:
 
     @classmethod
     def load(cls, path: PathLike) -> Scene:
-        """A scene from a file: OBJ, PLY, glTF/GLB, a TOML scene description, or a pbrt-v4
-        scene (`.pbrt`, `.pbrt.gz`) with its camera and film size."""
+        """A scene from a file: OBJ, PLY, glTF/GLB, a TOML scene description, a pbrt-v4
+        scene (`.pbrt`, `.pbrt.gz`) or a Mitsuba 3 scene (`.xml`), the last two with their
+        camera and film size."""
         return cls(_hmdist.Scene.load(os.fspath(path)))
 
     @classmethod

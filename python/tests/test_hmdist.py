@@ -534,3 +534,24 @@ def test_a_pbrt_scene_loads_with_its_film_size_and_mirrored_camera(tmp_path: Pat
     assert cam.mirrored and pickle.loads(pickle.dumps(cam)) == cam and "mirrored=True" in repr(cam)
     same, _ = s.render(cam, rays=4)
     assert np.array_equal(H.view(np.uint32), same.view(np.uint32))
+
+
+def test_a_mitsuba_scene_loads_with_its_film_size_and_skips(tmp_path: Path) -> None:
+    # Issue #68: a Mitsuba 3 file, its film's size the default, what it skipped listed.
+    (tmp_path / "s.xml").write_text(
+        '<scene version="3.0.0"><default name="w" value="12"/>'
+        '<sensor type="perspective"><float name="fov" value="45"/>'
+        '<transform name="to_world"><lookat origin="0 1 5" target="0 1 0" up="0 1 0"/></transform>'
+        '<film type="hdrfilm"><integer name="width" value="$w"/><integer name="height" value="8"/></film></sensor>'
+        '<shape type="rectangle"><transform name="to_world"><rotate x="1" angle="-90"/><scale value="5"/></transform></shape>'
+        '<shape type="sphere"/><emitter type="envmap"><string name="filename" value="sky.exr"/></emitter></scene>')
+    s = hmdist.Scene.load(tmp_path / "s.xml")
+    info = s.info
+    assert info["size"] == (12, 8) and info["camera"]["mirrored"] is False
+    assert info["skipped"] == [("envmap emitter", 1)] and info["sources"][0] == ("rectangle", 2)
+    H, _ = s.render(rays=4)
+    assert H.shape == (8, 12)
+    (tmp_path / "bad.xml").write_text(
+        '<scene version="3.0.0"><shape type="obj"><string name="filename" value="$nothing"/></shape></scene>')
+    with pytest.raises(OSError, match=r"bad\.xml:1: .*\$nothing is not defined"):
+        hmdist.Scene.load(tmp_path / "bad.xml")

@@ -29,7 +29,8 @@ pub struct PointsArgs {
     /// H per row: .npy (float32, shape [n]) or .csv (one value per line); +inf where every
     /// ray escaped.
     output: PathBuf,
-    /// Scene: a built-in (cube, hall, sphere, slab, dome) or a file (.obj, .ply, .gltf, .glb, .toml).
+    /// Scene: a built-in (cube, hall, sphere, slab, dome) or a file (.obj, .ply, .gltf, .glb, .toml,
+    /// .pbrt, .pbrt.gz, Mitsuba 3 .xml).
     #[arg(long, default_value = "cube")]
     scene: String,
     /// Gather rays per point N.

@@ -20,7 +20,8 @@ use super::bar::Bar;
 
 #[derive(Args)]
 pub struct RenderArgs {
-    /// Scene: a built-in (cube, hall, sphere, slab, dome) or a file (.obj, .ply, .gltf, .glb, .toml).
+    /// Scene: a built-in (cube, hall, sphere, slab, dome) or a file (.obj, .ply, .gltf, .glb, .toml,
+    /// .pbrt, .pbrt.gz, Mitsuba 3 .xml).
     #[arg(long, default_value = "cube")]
     scene: String,
     /// Estimator (docs/spec.md §3).

@@ -199,3 +199,39 @@ pub fn add_square(mesh: &mut Mesh, centre: Vec3, a: Vec3, b: Vec3) {
     mesh.add_triangle(first, first + 1, first + 2);
     mesh.add_triangle(first, first + 2, first + 3);
 }
+
+/// A scene's triangles as a sorted set of sorted corners: two scenes hold the same geometry
+/// when their sets match, whatever the order of triangles and corners. Coordinates are rounded
+/// to 1e-4 for sorting, so float noise around a tie cannot reorder them.
+pub fn triangle_set(scene: &Scene) -> Vec<[[f32; 3]; 3]> {
+    let key = |p: Vec3| [p.x, p.y, p.z].map(|v| (v * 1e4).round() / 1e4);
+    let mut set: Vec<[[f32; 3]; 3]> = (0..scene.mesh.triangle_count())
+        .map(|i| {
+            let mut t = scene.mesh.triangle(i).map(key);
+            t.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            t
+        })
+        .collect();
+    set.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    set
+}
+
+/// Asserts that two scenes hold the same triangles (`triangle_set`), corner for corner within
+/// `tolerance`.
+pub fn assert_same_triangles(a: &Scene, b: &Scene, tolerance: f32) {
+    let (a, b) = (triangle_set(a), triangle_set(b));
+    assert_eq!(a.len(), b.len(), "triangle counts differ");
+    for (s, t) in a.iter().zip(&b) {
+        for (p, q) in s.iter().zip(t) {
+            let d = Vec3::from(*p) - Vec3::from(*q);
+            assert!(d.length() <= tolerance, "{p:?} != {q:?}");
+        }
+    }
+}
+
+/// Five vertices and three triangles, as OBJ and as ASCII PLY: the mesh the scene-format
+/// tests place in every way a format can say it.
+pub const TRI_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0.5\nv 0.3 0.2 2\nf 1 2 3\nf 1 3 4\nf 2 5 3\n";
+pub const TRI_PLY: &str = "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n\
+    element face 3\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0.5\n0.3 0.2 2\n\
+    3 0 1 2\n3 0 2 3\n3 1 4 2\n";

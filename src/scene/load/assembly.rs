@@ -49,6 +49,69 @@ pub enum Quadric {
     },
 }
 
+impl Quadric {
+    /// Refuses a quadric with no surface, naming what makes it empty.
+    pub fn check(&self) -> std::result::Result<(), String> {
+        let problem = match *self {
+            Quadric::Sphere { radius, .. }
+            | Quadric::Disk { radius, .. }
+            | Quadric::Cylinder { radius, .. }
+                if radius.is_nan() || radius <= 0.0 =>
+            {
+                format!("its radius must be positive, not {radius}")
+            }
+            Quadric::Sphere { z_min, z_max, .. } if z_min.is_nan() || z_max.is_nan() || z_min >= z_max => {
+                format!("its zmin ({z_min}) must be below its zmax ({z_max})")
+            }
+            Quadric::Cylinder { z_min, z_max, .. } if z_min == z_max => {
+                format!("its zmin and zmax ({z_min}) must differ")
+            }
+            Quadric::Disk { radius, inner, .. } if !(0.0..radius).contains(&inner) => {
+                format!("its inner radius ({inner}) must be from 0 to below its radius ({radius})")
+            }
+            _ => return Ok(()),
+        };
+        Err(format!("the {} is empty: {problem}", self.name()))
+    }
+
+    /// The shape's name: "sphere", "disk" or "cylinder".
+    pub fn name(&self) -> &'static str {
+        match self {
+            Quadric::Sphere { .. } => "sphere",
+            Quadric::Disk { .. } => "disk",
+            Quadric::Cylinder { .. } => "cylinder",
+        }
+    }
+}
+
+/// Triangles or a quadric, placed, waiting to be added (to the scene, or to an object that
+/// instances copy).
+#[derive(Clone)]
+pub enum Piece {
+    Triangles {
+        source: String,
+        positions: Vec<DVec3>,
+        indices: Vec<[u32; 3]>,
+        to_world: DMat4,
+    },
+    Quadric {
+        source: String,
+        quadric: Quadric,
+        to_world: DMat4,
+    },
+}
+
+impl Piece {
+    /// The piece placed by `m` after its own matrix.
+    pub fn placed(&self, m: &DMat4) -> Piece {
+        let mut piece = self.clone();
+        match &mut piece {
+            Piece::Triangles { to_world, .. } | Piece::Quadric { to_world, .. } => *to_world = *m * *to_world,
+        }
+        piece
+    }
+}
+
 /// A scene being put together: the mesh so far (in world space), the quadrics waiting for
 /// the scene's size, and the notes.
 #[derive(Default)]
@@ -86,6 +149,27 @@ impl Assembly {
         Ok(())
     }
 
+    /// Adds `piece`, placed by `placed_by` after its own matrix (an instance's transform, or
+    /// the identity).
+    pub fn add(&mut self, piece: &Piece, placed_by: &DMat4) -> Result<()> {
+        match piece {
+            Piece::Triangles {
+                source,
+                positions,
+                indices,
+                to_world,
+            } => self.add_triangles(source, positions, indices, &(*placed_by * *to_world)),
+            Piece::Quadric {
+                source,
+                quadric,
+                to_world,
+            } => {
+                self.add_quadric(source, *quadric, *placed_by * *to_world);
+                Ok(())
+            }
+        }
+    }
+
     /// Adds a quadric placed by `to_world`, tessellated by [`Assembly::finish`].
     pub fn add_quadric(&mut self, source: &str, quadric: Quadric, to_world: DMat4) {
         self.quadrics.push((quadric, to_world, source.to_string()));
@@ -111,6 +195,28 @@ impl Assembly {
             }
         }
         bounds
+    }
+
+    /// The scene loaded from `path`: [`Assembly::finish`]'s mesh and notes, with `camera`,
+    /// `light` and the file's image `size`.
+    pub fn into_scene(
+        self,
+        path: &std::path::Path,
+        camera: Camera,
+        light: Option<crate::scene::SpotLight>,
+        size: Option<(u32, u32)>,
+    ) -> Result<crate::scene::Scene> {
+        let (mesh, mut notes) = self.finish().map_err(|e| super::common::in_file(path, e))?;
+        notes.size = size;
+        let bounds = mesh.bounds();
+        Ok(crate::scene::Scene {
+            name: super::common::file_name(path),
+            mesh,
+            camera,
+            light,
+            display_scale: crate::scene::default_display_scale(bounds),
+            notes,
+        })
     }
 
     /// The mesh, with every quadric tessellated to [`CHORD_ERROR`] of the whole scene's

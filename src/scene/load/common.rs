@@ -112,3 +112,29 @@ pub(super) fn line_of_offset(text: &[u8], offset: usize) -> usize {
         .filter(|&&b| b == b'\n')
         .count()
 }
+
+/// A line of the file being read and what is wrong there.
+pub(super) type Located = (usize, String);
+
+/// An error of a scene file that names other files: at a line of the file being read, or one
+/// already complete (from an included or mesh file, which names itself).
+pub(super) enum Failure {
+    Here(Located),
+    Error(Error),
+}
+
+impl From<Located> for Failure {
+    fn from(located: Located) -> Self {
+        Failure::Here(located)
+    }
+}
+
+impl Failure {
+    /// The error, a line of `file` where it is one.
+    pub(super) fn in_file(self, file: &Path) -> Error {
+        match self {
+            Failure::Here((line, message)) => Error::file_line(file, line, message),
+            Failure::Error(e) => e,
+        }
+    }
+}

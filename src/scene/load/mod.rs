@@ -1,10 +1,13 @@
-//! Scene files: OBJ, PLY, glTF 2.0 / GLB meshes and the TOML scene description (spec §7).
+//! Scene files: OBJ, PLY, glTF 2.0 / GLB meshes, the TOML scene description, pbrt-v4 and
+//! Mitsuba 3 scenes (spec §7).
 //!
 //! The format follows the extension (case-insensitive): `.obj`, `.ply`, `.gltf`, `.glb`,
-//! `.toml`. A mesh file gives triangles, and a glTF file may also give a camera and a spot
-//! light; what a file lacks is filled in from its bounds ([`framing_camera`],
-//! [`default_display_scale`]). Only positions and faces are read: normals, texture
-//! coordinates and materials play no part in H (surfaces are diffuse and two-sided, spec §1).
+//! `.toml`, `.pbrt` (`.pbrt.gz`), `.xml`. A mesh file gives triangles, and a glTF file may also
+//! give a camera and a spot light; a pbrt or Mitsuba scene gives its camera, film size and
+//! spot light, and says what it skipped ([`crate::scene::SceneNotes`]). What a file lacks is
+//! filled in from its bounds ([`framing_camera`], [`default_display_scale`]). Only positions
+//! and faces are read: normals, texture coordinates and materials play no part in H (surfaces
+//! are diffuse and two-sided, spec §1).
 //!
 //! Every error is an [`Error::File`] naming the file, and the line where the format has
 //! lines. Loaders never panic on bad input: where a parsing crate can panic on malformed
@@ -17,6 +20,7 @@ mod assembly;
 mod common;
 mod gltf;
 mod meshes;
+mod mitsuba;
 mod obj;
 mod pbrt;
 mod ply;
@@ -43,6 +47,7 @@ pub fn load_bytes(path: &Path, bytes: &[u8]) -> Result<Scene> {
     let scene = match format_of(path)? {
         Format::SceneToml => toml::load_scene(path, bytes)?,
         Format::Pbrt => pbrt::load(path, bytes)?,
+        Format::Mitsuba => mitsuba::load(path, bytes)?,
         _ => {
             let file = load_mesh_bytes(path, bytes)?;
             let bounds = file.mesh.bounds();
@@ -60,6 +65,21 @@ pub fn load_bytes(path: &Path, bytes: &[u8]) -> Result<Scene> {
     Ok(scene)
 }
 
+/// The triangles of mesh `shape_index` of a Mitsuba `.serialized` file whose bytes are
+/// `bytes` (versions 3 to 5), as a `<shape type="serialized">` reads them; errors name `path`.
+pub fn load_serialized_bytes(
+    path: &Path,
+    bytes: &[u8],
+    shape_index: usize,
+) -> Result<crate::scene::mesh::Mesh> {
+    let (positions, indices) =
+        mitsuba::serialized(bytes, shape_index).map_err(|m| crate::error::Error::file(path, m))?;
+    Ok(crate::scene::mesh::Mesh {
+        positions: positions.iter().map(|p| p.as_vec3()).collect(),
+        indices,
+    })
+}
+
 /// Every file that loading the scene file at `path` reads: the file, and a TOML scene's
 /// meshes (as far as the file can be read; a file that cannot fails its load anyway).
 pub fn files_read(path: &Path) -> Vec<std::path::PathBuf> {
@@ -71,6 +91,7 @@ pub fn files_read(path: &Path) -> Vec<std::path::PathBuf> {
             }
         }
         Ok(Format::Pbrt) => return pbrt::files_read(path),
+        Ok(Format::Mitsuba) => return mitsuba::files_read(path),
         _ => {}
     }
     files

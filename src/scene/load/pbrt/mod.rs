@@ -37,10 +37,10 @@ use std::path::{Path, PathBuf};
 
 use glam::{DMat4, DVec3};
 
-use super::assembly::{camera_from_frame, Assembly, Quadric};
-use super::common::{file_name, read_bytes};
+use super::assembly::{camera_from_frame, Assembly, Piece, Quadric};
+use super::common::{read_bytes, Failure};
 use crate::error::{Error, Result};
-use crate::scene::{default_display_scale, framing_camera, Scene, SpotLight};
+use crate::scene::{framing_camera, Scene, SpotLight};
 use tokens::{Located, Params, Token, Tokens};
 
 /// Includes nested deeper than this are taken for a file that includes itself.
@@ -107,21 +107,6 @@ enum Active {
     End,
 }
 
-/// Triangles or a quadric, placed, waiting to be added (to the scene or to an object).
-enum Piece {
-    Triangles {
-        source: String,
-        positions: Vec<DVec3>,
-        indices: Vec<[u32; 3]>,
-        to_world: DMat4,
-    },
-    Quadric {
-        source: String,
-        quadric: Quadric,
-        to_world: DMat4,
-    },
-}
-
 /// The camera as the file declared it, resolved once the film is known.
 struct CameraDeclared {
     kind: String,
@@ -164,10 +149,7 @@ impl Reader {
                 ));
             };
             self.directive(&directive, line, &mut tokens, file, depth)
-                .map_err(|e| match e {
-                    Failure::Here((line, message)) => Error::file_line(file, line, message),
-                    Failure::Error(e) => e,
-                })?;
+                .map_err(|e| e.in_file(file))?;
         }
         Ok(())
     }
@@ -357,23 +339,7 @@ impl Reader {
                     .ok_or_else(|| here(format!("ObjectInstance: no object \"{object}\" was defined")))?;
                 let ctm = self.ctm;
                 for piece in pieces {
-                    match piece {
-                        Piece::Triangles {
-                            source,
-                            positions,
-                            indices,
-                            to_world,
-                        } => {
-                            self.assembly
-                                .add_triangles(source, positions, indices, &(ctm * *to_world))
-                                .map_err(Failure::Error)?;
-                        }
-                        Piece::Quadric {
-                            source,
-                            quadric,
-                            to_world,
-                        } => self.assembly.add_quadric(source, *quadric, ctm * *to_world),
-                    }
+                    self.assembly.add(piece, &ctm).map_err(Failure::Error)?;
                 }
                 self.instances += 1;
             }
@@ -599,26 +565,14 @@ impl Reader {
             }
         };
         if let Piece::Quadric { quadric, .. } = &piece {
-            check_quadric(quadric).map_err(here)?;
+            quadric.check().map_err(here)?;
         }
         match &mut self.defining {
             Some((_, pieces)) => pieces.push(piece),
-            None => match piece {
-                Piece::Triangles {
-                    source,
-                    positions,
-                    indices,
-                    to_world,
-                } => self
-                    .assembly
-                    .add_triangles(&source, &positions, &indices, &to_world)
-                    .map_err(Failure::Error)?,
-                Piece::Quadric {
-                    source,
-                    quadric,
-                    to_world,
-                } => self.assembly.add_quadric(&source, quadric, to_world),
-            },
+            None => self
+                .assembly
+                .add(&piece, &DMat4::IDENTITY)
+                .map_err(Failure::Error)?,
         }
         Ok(())
     }
@@ -695,29 +649,7 @@ impl Reader {
                     .map_err(|(l, m)| Error::file_line(&c.file, l, format!("Camera \"perspective\": {m}")))?
             }
         };
-        let (mesh, mut notes) = assembly.finish().map_err(|e| super::common::in_file(path, e))?;
-        notes.size = Some(film);
-        let bounds = mesh.bounds();
-        Ok(Scene {
-            name: file_name(path),
-            mesh,
-            camera,
-            light,
-            display_scale: default_display_scale(bounds),
-            notes,
-        })
-    }
-}
-
-/// An error at a line of the file being read, or one already complete (from an included file).
-enum Failure {
-    Here(Located),
-    Error(Error),
-}
-
-impl From<Located> for Failure {
-    fn from(located: Located) -> Self {
-        Failure::Here(located)
+        assembly.into_scene(path, camera, light, Some(film))
     }
 }
 
@@ -727,24 +659,6 @@ fn cause(error: &Error) -> String {
         Error::File { message, .. } => message.clone(),
         other => other.to_string(),
     }
-}
-
-fn check_quadric(quadric: &Quadric) -> std::result::Result<(), String> {
-    let (radius, ok) = match *quadric {
-        Quadric::Sphere {
-            radius, z_min, z_max, ..
-        } => (radius, z_min < z_max),
-        Quadric::Disk { radius, inner, .. } => (radius, (0.0..radius).contains(&inner)),
-        Quadric::Cylinder {
-            radius, z_min, z_max, ..
-        } => (radius, z_min != z_max),
-    };
-    if !(radius > 0.0 && ok) {
-        return Err(format!(
-            "{quadric:?} is empty: its radius must be positive and its extent non-empty"
-        ));
-    }
-    Ok(())
 }
 
 /// pbrt's `LookAt`: camera from world, for a camera at `eye` looking at `look`.

@@ -36,8 +36,7 @@ pub struct Tokens<'a> {
     peeked: Option<(Token, usize)>,
 }
 
-/// A message and the line it is about.
-pub type Located = (usize, String);
+pub(in crate::scene::load) use crate::scene::load::common::Located;
 
 impl<'a> Tokens<'a> {
     pub fn new(text: &'a [u8]) -> Self {
