@@ -1,22 +1,21 @@
 #!/usr/bin/env bash
-# The GPU figures that fit one lease of the device machine (an H100/H200, 15 minutes with its
-# start-up; the run takes about 2 minutes on an H200): the GPU's name, a smoke render, the GPU
+# The GPU figures (about 2 minutes on an H200): the GPU's name, a smoke render, the GPU
 # part of `cargo bench --bench gather` (cube and hall, 1024² × 256 and 4,096), the paper's
 # reference (`cube` 1024² × 65,536 rays, --seed 1000003) on the GPU with its f_diff against the
 # committed CPU reference, the cube map by rays at 1024² × 4,096 (`--gpu-fill rays`, built
 # 2026-12-04 after the H200 rasterised slowly; not yet run on a GPU), and `cargo bench --bench
-# cubemap` (64², cpu, gpu raster and gpu rays). Run it first
-# when a session is lent a GPU machine; README.md beside this has the 2026-12-04 H200 figures.
+# cubemap` (64², cpu, gpu raster and gpu rays). README.md beside this has the 2026-12-04 H200
+# figures.
 #
-# The device machine has no Rust toolchain or crates: build here and carry the binaries, and
-# the Vulkan loader (the machine has NVIDIA's driver but may lack libvulkan.so.1):
+# On a GPU machine without a Rust toolchain or crates, build elsewhere and copy the binaries,
+# and the Vulkan loader where the machine has NVIDIA's driver but no libvulkan.so.1:
 #   printf '/.dev/\n/.gl/\n' >> .git/info/exclude; mkdir -p .dev .gl /tmp/amd64/partial
 #   cargo build --release && cargo bench --no-run --bench gather --bench cubemap
 #   strip -o .dev/hmdist target/release/hmdist      # 76 MB with line tables, 11 MB stripped
 #   for b in gather cubemap; do strip -o .dev/$b $(ls -t target/release/deps/$b-* | grep -v '\.d$' | head -1); done
 #   o='-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64'
 #   apt-get $o update && (cd .gl && apt-get $o download libvulkan1)
-# then one device call, carrying .dev and .gl:
+# then, on the GPU machine, with .dev and .gl beside the checkout:
 #   DEVICE=1 docs/paper-scale/gpu-figures.sh 2>&1 | tee $OUT/gpu-figures.log
 # It writes reference_gpu.json and reference_gpu_diff.png into OUT. BUDGET (seconds, default
 # 400) bounds the whole; the reference is skipped where its first sixteenth projects past it.

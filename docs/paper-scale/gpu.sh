@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The paper's `cube` reproduction at its own scale on a GPU machine (issue #22): gather and the
+# The paper's `cube` reproduction at its own scale on a GPU machine: gather and the
 # cube map on the GPU, the photon studies on the CPU side. Prints the GPU's name, the plan
 # (every image, each once, with its estimated seconds), then each experiment's seconds, and
 # writes the tables, plots, picture grids and index.html into OUT.
@@ -7,12 +7,11 @@
 #   docs/paper-scale/gpu.sh [OUT]        # default: $OUT/paper-cube on the device machine,
 #                                        # else /tmp/paper-cube
 #
-# It does not fit one lease of the device machine (15 minutes): on an H200 (2026-12-04) the
-# GPU cube map rasterises about 1,900 hemicubes/s, about 9 minutes per 1024² pass, and the
-# plan's calibration alone outran its 120 s (README.md beside this, "First run"). Since then
-# the cube maps are filled by rays (GPU_FILL, below), which should take them to seconds; the
-# photon studies (about 12 minutes of 16 cores) still do not fit. For the figures that fit a
-# lease, run gpu-figures.sh instead.
+# Run time: on an H200 (2026-12-04) the GPU cube map rasterised about 1,900 hemicubes/s, about
+# 9 minutes per 1024² pass, and the plan's calibration took longer than its 120 s (README.md
+# beside this, "First run"). Since then the cube maps are filled by rays (GPU_FILL, below),
+# which should take them to seconds; the photon studies take about 12 minutes of 16 cores.
+# gpu-figures.sh makes the GPU figures alone, in about 2 minutes.
 # The run stops cleanly after LIMIT seconds (default 420) and keeps the images it finished in
 # OUT/cache (large ones in parts), so running the script again continues where it stopped;
 # the run that finishes writes the report, and each experiment's planned and actual seconds

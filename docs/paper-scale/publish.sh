@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Copies an experiment run's results from OUT into DEST for the repository (issue #22): the
+# Copies an experiment run's results from OUT into DEST for the repository: the
 # tables (Markdown, CSV), plots (SVG), index.html, the plan and plan-against-run files, and the
 # picture grids, each PNG over 2 MB downscaled (Lanczos) until it is under 2 MB (at paper scale
 # a grid of 1024² tiles is 15 MB). No image cache, no EXR.
