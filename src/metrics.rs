@@ -148,17 +148,20 @@ fn percentile(sorted: &[f64], q: f64) -> f64 {
     sorted[rank - 1]
 }
 
+/// Where a difference picture has no difference to show (a pixel not finite in both images:
+/// background, a window onto nothing): a blue that no difference is drawn in.
+pub const NO_SURFACE: image::Rgb<u8> = image::Rgb([96, 150, 220]);
+
 /// The difference picture of spec §4: grey `1 − clamp(10 · s · |ΔH|)`, white where equal;
-/// pixels not finite in both images are black.
-pub fn difference_picture(reference: &HmdImage, test: &HmdImage, scale: f32) -> image::GrayImage {
-    image::GrayImage::from_fn(reference.width, reference.height, |x, y| {
+/// pixels not finite in both images are [`NO_SURFACE`] blue, apart from the greys.
+pub fn difference_picture(reference: &HmdImage, test: &HmdImage, scale: f32) -> image::RgbImage {
+    image::RgbImage::from_fn(reference.width, reference.height, |x, y| {
         let (r, t) = (reference.at(x, y), test.at(x, y));
-        let v = if r.is_finite() && t.is_finite() {
-            1.0 - (10.0 * scale * (r - t).abs()).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        image::Luma([(v * 255.0).round() as u8])
+        if !(r.is_finite() && t.is_finite()) {
+            return NO_SURFACE;
+        }
+        let v = 1.0 - (10.0 * scale * (r - t).abs()).clamp(0.0, 1.0);
+        image::Rgb([(v * 255.0).round() as u8; 3])
     })
 }
 
@@ -223,11 +226,20 @@ mod tests {
         assert!((c.rmse - 0.5).abs() < 1e-12);
         assert!((c.mean_relative_error - (0.5 + 0.25 + 0.125) / 3.0).abs() < 1e-12);
         let picture = difference_picture(&a, &b, 0.1);
-        assert_eq!(picture.get_pixel(0, 0).0[0], 128, "1 - 10·0.1·0.5 = 0.5");
+        assert_eq!(picture.get_pixel(0, 0).0, [128; 3], "1 - 10·0.1·0.5 = 0.5");
         assert_eq!(
-            difference_picture(&a, &a, 0.1).get_pixel(2, 0).0[0],
-            255,
+            difference_picture(&a, &a, 0.1).get_pixel(2, 0).0,
+            [255; 3],
             "equal is white"
+        );
+        // No surface in either image: its own colour, not the largest difference's black.
+        let nan = image(vec![f32::NAN, 2.0, 100.0]);
+        let picture = difference_picture(&nan, &a, 0.1);
+        assert_eq!(picture.get_pixel(0, 0), &NO_SURFACE);
+        assert_eq!(
+            picture.get_pixel(2, 0).0,
+            [0; 3],
+            "the largest difference is black"
         );
     }
 

@@ -100,6 +100,19 @@ fn quick_table1_on_cube_falls_with_rays_and_the_report_links_only_existing_files
         }
     }
 
+    // The pictures by N, as the paper's: Fig. 12 the cube map's, Fig. 13 gather's; the same
+    // layout (7 counts: two rows of pictures, each over its difference pictures), other images.
+    let (fig12, fig13) = (
+        image::open(out.join("fig12.png")).unwrap(),
+        image::open(out.join("fig13.png")).unwrap(),
+    );
+    assert_eq!(fig12.height(), fig13.height());
+    assert_ne!(
+        fig12.to_luma8().into_raw(),
+        fig13.to_luma8().into_raw(),
+        "fig12 is not gather's"
+    );
+
     // A rerun renders nothing: every cached file stays as it was written.
     let before = backdate_cache(&out);
     let mut again = Runner::new("cube", Preset::Quick, &out, &Silent).unwrap();
@@ -107,6 +120,54 @@ fn quick_table1_on_cube_falls_with_rays_and_the_report_links_only_existing_files
     assert_eq!(cache_times(&out), before);
     let csv_again = std::fs::read_to_string(out.join("table1.csv")).unwrap();
     assert_eq!(column(&csv_again, 1), gather);
+}
+
+/// In the closed `cube` no path escapes: with nothing absorbed every path runs to its cap and
+/// stores a photon at each of its `cap` interactions, so `P / cap` paths store `P` photons; with
+/// absorption `a` a path stores `(1 − a)(1 − (1 − a)^cap) / a` photons on average (a photon at
+/// interaction k survives k + 1 absorption draws). The paper traced 4× the paths at 20
+/// bounces as at 80: only the first case gives that.
+#[test]
+fn where_nothing_is_absorbed_the_bounce_cap_study_traces_one_path_per_cap_photons() {
+    let dir = Scratch::new("experiments-bounce-cap");
+    let out = dir.join("out");
+    let mut runner = Runner::new("cube", Preset::Quick, &out, &Silent).unwrap();
+    runner.run("fig16_17").unwrap();
+    let csv = std::fs::read_to_string(out.join("fig16_17_cap.csv")).unwrap();
+    let photons = Preset::Quick.params().fig16_photons[0] as f64;
+    let mut rows = 0;
+    for line in csv.lines().skip(1) {
+        let cells: Vec<&str> = line.split(',').collect();
+        let (a, cap, paths): (f64, f64, f64) = (
+            cells[1].parse().unwrap(),
+            cells[2].parse().unwrap(),
+            cells[3].parse().unwrap(),
+        );
+        if a == 0.0 {
+            assert_eq!(paths, (photons / cap).ceil(), "{line}");
+        } else {
+            let per_path = (1.0 - a) * (1.0 - (1.0 - a).powf(cap)) / a;
+            let expected = photons / per_path;
+            assert!(
+                (paths / expected - 1.0).abs() < 0.02,
+                "{line}: {expected:.0} paths expected"
+            );
+        }
+        rows += 1;
+    }
+    assert_eq!(rows, 2 * 3 * 2, "light and camera, three absorptions, two caps");
+    // One picture laid out as the paper's Fig. 16/17: four columns (source by cap) of tiles.
+    let picture = image::open(out.join("fig16_17.png")).unwrap();
+    assert!(
+        picture.width() > 4 * 144 && picture.width() < 6 * 144,
+        "{}",
+        picture.width()
+    );
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(
+        html.contains("where the cap binds"),
+        "the finding is decided where the cap binds"
+    );
 }
 
 /// A floor and a ceiling `height` above it, 20 wide, as OBJ text.

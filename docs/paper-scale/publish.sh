@@ -56,7 +56,7 @@ if not run:
 head, intro, preamble, sections, tail = parse(new)
 if preamble.strip():
     preamble = preamble.replace('<a href="plan.md">plan.md</a>', f'<a href="plan_{run}.md">plan_{run}.md</a>')
-    sections[f"plan_{run}"] = f'<h2 id="plan_{run}">plan against run: {run}</h2>\n{preamble}'
+    sections[f"plan_{run}"] = f'<h2 id="plan_{run}">Appendix: plan against run, {run}</h2>\n{preamble}'
 if os.path.exists(target):
     _, old_intro, _, old_sections, _ = parse(open(target, encoding="utf-8").read())
     if old_intro != intro:
@@ -64,17 +64,25 @@ if os.path.exists(target):
     sections = {**old_sections, **sections}
 rank = lambda s: (ORDER.index(s) if s in ORDER else len(ORDER), s)
 sections.pop("findings", None)
+sections.pop("our-findings", None)
 order = sorted(sections, key=rank)
-# The page's first section: every section's findings (its <li class="finding"> items), each
-# linked to its section, made again from the merged sections.
-items = [
-    f'<li><a href="#{name}">{name}</a>: {item}</li>'
-    for name in order
-    for item in re.findall(r'<li class="finding">(.*?)</li>', sections[name])
-]
-findings = f'<h2 id="findings">The paper\'s findings</h2>\n<ul>\n' + "\n".join(items) + "\n</ul>\n" if items else ""
+# The page's first sections: every section's findings (its <li class="finding"> items), each
+# linked to its section, made again from the merged sections; the paper's first, then those
+# of the studies beyond the paper (the report's BEYOND_THE_PAPER).
+BEYOND_THE_PAPER = ["adaptive", "cache", "memory", "cost"]
+findings, count = "", 0
+for id, heading, ours in [("findings", "The paper's findings", False), ("our-findings", "Findings of our own, beyond the paper", True)]:
+    items = [
+        f'<li><a href="#{name}">{name}</a>: {item}</li>'
+        for name in order
+        if (name in BEYOND_THE_PAPER) == ours
+        for item in re.findall(r'<li class="finding">(.*?)</li>', sections[name])
+    ]
+    count += len(items)
+    if items:
+        findings += f'<h2 id="{id}">{heading}</h2>\n<ul>\n' + "\n".join(items) + "\n</ul>\n"
 write(head + intro + findings + "".join(sections[s] for s in order) + tail)
-print(f"{os.path.basename(target)}: sections {', '.join(order)}; {len(items)} findings")
+print(f"{os.path.basename(target)}: sections {', '.join(order)}; {count} findings")
 PY
 for f in "$out"/*.png; do
     python3 - "$f" "$dest/$(basename "$f")" <<'PY'

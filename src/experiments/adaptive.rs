@@ -160,7 +160,7 @@ pub fn adaptive(runner: &Runner) -> Result<Section> {
     let sweeps = fixed_sweeps(runner, &reference, l_diag)?;
     let mut table = Table::new(
         &format!(
-            "Adaptive gathering ({}): f_diff against gather with {} rays, {}², `{}`; at most {} rays; the best fixed N of the grid and the sobol sampler",
+            "Adaptive gathering (preset {}): f_diff against gather with {} rays, {}², `{}`; at most {} rays; the best fixed N of the grid and the sobol sampler",
             runner.preset.name(),
             p.reference_rays,
             p.size,

@@ -26,7 +26,7 @@ pub struct Experiment {
 pub const EXPERIMENTS: &[Experiment] = &[
     Experiment {
         name: "table1",
-        summary: "f_diff against rays, gather and cube map (with fig12, fig13 and a plot)",
+        summary: "f_diff against rays, gather and cube map (with the pictures by N: fig12 of the cube map, fig13 of gather, and a plot)",
         images: |p| 1 + 2 * p.rays.len() as u64,
         run: rays::table1,
     },
@@ -50,7 +50,7 @@ pub const EXPERIMENTS: &[Experiment] = &[
     },
     Experiment {
         name: "table3",
-        summary: "photon gather seconds and f_diff by photons and K, methods I and II (with fig14, fig15)",
+        summary: "photon gather seconds and f_diff by photons and K, methods I and II, camera-sourced, 20 bounces (with fig14, fig15)",
         images: |p| 1 + 2 * (p.photons.len() * p.nearest.len()) as u64,
         run: photons::table3,
     },
@@ -68,8 +68,11 @@ pub const EXPERIMENTS: &[Experiment] = &[
     },
     Experiment {
         name: "fig16_17",
-        summary: "method II by source, bounces, K and photons",
-        images: |p| 1 + 4 * (p.fig16_photons.len() * p.nearest.len()) as u64,
+        summary: "method II by source, bounces, K and photons (fig16_17), and where the bounce cap binds",
+        images: |p| {
+            let sources = 2 * photons::BOUNCE_CAPS as u64;
+            1 + 4 * (p.fig16_photons.len() * p.fig16_nearest.len()) as u64 + sources * photons::CAP_ABSORPTIONS.len() as u64
+        },
         run: photons::fig16_17,
     },
     Experiment {

@@ -9,7 +9,7 @@
 //! `table3.csv`, `table4.csv`): run it after them into the same `--out` (`all` does).
 
 use super::paper::{self, PaperScene};
-use super::photons::default_source;
+use super::photons::{default_source, photon_count};
 use super::plot::{log_log_with, Marks, Series};
 use super::runner::Runner;
 use super::section::Section;
@@ -102,15 +102,6 @@ fn significant(v: f64) -> String {
     format!("{v:.digits$}")
 }
 
-/// A photon count as the paper writes it: `130 K`, `1.06 M`.
-fn photon_count(photons: usize) -> String {
-    if photons >= 1_000_000 {
-        format!("{:.2} M", photons as f64 / 1e6)
-    } else {
-        format!("{} K", photons / 1000)
-    }
-}
-
 /// The number in `row`'s cell of `column`, if the column exists and the cell holds one.
 fn number(table: &Table, row: &[String], column: &str) -> Option<f64> {
     table.column(column).and_then(|c| row[c].parse().ok())
@@ -177,8 +168,14 @@ fn cost_points(runner: &Runner) -> Result<(Vec<CostPoint>, Vec<&'static str>)> {
         }
     }
     if let Some(t3) = &table3 {
-        let source = default_source(runner);
+        // Table 3's source, as its rows say (a table from before the column: the default
+        // source, which it was rendered with then).
+        let source_of = |row: &[String]| match t3.column("source") {
+            Some(c) => row[c].clone(),
+            None => default_source(runner).name().to_string(),
+        };
         for row in &t3.rows {
+            let source = source_of(row);
             let (Some(photons), Some(k)) = (number(t3, row, "photons"), number(t3, row, "K")) else {
                 continue;
             };
@@ -190,13 +187,13 @@ fn cost_points(runner: &Runner) -> Result<(Vec<CostPoint>, Vec<&'static str>)> {
                 .and_then(|t4| {
                     let source_column = t4.column("source")?;
                     let row = t4.rows.iter().find(|r| {
-                        number(t4, r, "photons") == Some(photons as f64) && r[source_column] == source.name()
+                        number(t4, r, "photons") == Some(photons as f64) && r[source_column] == source
                     })?;
                     number(t4, row, "total s")
                 })
                 .unwrap_or(0.0);
             let published = paper::table3_cell(photons, k);
-            let paper_build = paper::table4_row(photons).map(|r| match source.name() {
+            let paper_build = paper::table4_row(photons).map(|r| match source.as_str() {
                 "light" => r.light_seconds,
                 _ => r.camera_seconds,
             });

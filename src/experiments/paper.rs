@@ -26,6 +26,11 @@ pub fn analogue(name: &str) -> Option<PaperScene> {
     }
 }
 
+/// The display scale s of the paper's pictures of scene A (grey `s · H`).
+pub const DISPLAY_SCALE_A: f32 = 0.14;
+/// The display scale of the paper's pictures of scene B.
+pub const DISPLAY_SCALE_B: f32 = 0.025;
+
 /// Table 1, `f_diff` of CPU final gathering against the 65,536-ray reference, scene A, in
 /// the text's order.
 pub const TABLE1_CPU_A: [f64; 8] = [0.5971, 0.3121, 0.1967, 0.1113, 0.0357, 0.0248, 0.0351, 0.0109];

@@ -33,10 +33,12 @@ pub struct PresetParams {
     pub rays: Vec<u32>,
     /// Photon counts of Tables 3 and 4.
     pub photons: Vec<usize>,
-    /// Photons gathered per pixel (K) for Table 3 and Fig. 16/17.
+    /// Photons gathered per pixel (K) for Table 3.
     pub nearest: Vec<usize>,
     /// Photon counts of Fig. 16/17.
     pub fig16_photons: Vec<usize>,
+    /// Photons gathered per pixel (K) of Fig. 16/17 (the paper's: 64, 256, 1,024).
+    pub fig16_nearest: Vec<usize>,
     /// Photons of Fig. 10.
     pub fig10_photons: usize,
     /// Photons gathered per pixel (K) of Fig. 10.
@@ -69,6 +71,7 @@ impl Preset {
                 photons: vec![130_000, 260_000, 530_000, 1_060_000],
                 nearest: vec![64, 256, 1024],
                 fig16_photons: vec![260_000, 1_060_000],
+                fig16_nearest: vec![64, 256, 1024],
                 fig10_photons: 1_060_000,
                 fig10_nearest: 4096,
                 cube_res: 64,
@@ -84,6 +87,7 @@ impl Preset {
                 ],
                 nearest: vec![64, 128, 256, 512, 1024],
                 fig16_photons: vec![1_060_000, 8_530_000],
+                fig16_nearest: vec![64, 256, 1024],
                 fig10_photons: 8_530_000,
                 fig10_nearest: 65_536,
                 cube_res: 64,

@@ -1,7 +1,7 @@
 //! The ray studies: accuracy and cost against the number of gather rays, final gathering
 //! against the cube map (paper Tables 1–2, Fig. 9, 12, 13).
 
-use super::grid::{write_grid, Tile};
+use super::grid::{write_grid, write_labelled_grid, Labels, Tile};
 use super::paper;
 use super::plot::{log_log_beside_paper, Series};
 use super::presets::REFERENCE_SEED;
@@ -38,6 +38,8 @@ struct RaySweep {
     excluded: usize,
     reference: HmdImage,
     gathered: Vec<HmdImage>,
+    /// The cube map's image per ray count, where the run renders cube maps.
+    cubemaps: Vec<HmdImage>,
     /// Where the cube maps were built, as their reports say (`cpu`, `gpu`); `None` where
     /// the run renders no cube map.
     cubemap_backend: Option<String>,
@@ -121,7 +123,7 @@ fn ray_sweep(runner: &Runner) -> Result<RaySweep> {
         runner.cubemap_sweep(&cubemap_group(runner), 1)?;
     }
     let l_diag = runner.scene.diagonal();
-    let (mut rows, mut gathered, mut excluded) = (vec![], vec![], 0);
+    let (mut rows, mut gathered, mut cubemaps, mut excluded) = (vec![], vec![], vec![], 0);
     let mut cubemap_backend = None;
     for &rays in &runner.params.rays {
         let (g, g_report) = runner.method_image("gather", &gather_params(rays), 1)?;
@@ -137,6 +139,7 @@ fn ray_sweep(runner: &Runner) -> Result<RaySweep> {
                 f_diff: fc.value,
                 seconds: c_report.seconds.estimate,
             });
+            cubemaps.push(c);
         }
         rows.push(SweepRow {
             rays,
@@ -151,6 +154,7 @@ fn ray_sweep(runner: &Runner) -> Result<RaySweep> {
         excluded,
         reference,
         gathered,
+        cubemaps,
         cubemap_backend,
     })
 }
@@ -189,7 +193,7 @@ pub fn table1(runner: &Runner) -> Result<Section> {
     let cubemap = cubemap_label(runner, &sweep);
     let mut ours = Table::new(
         &format!(
-            "Table 1 ({}): f_diff against gather with {} rays, {}², `{}`",
+            "Table 1 (preset {}): f_diff against gather with {} rays, {}², `{}`",
             runner.preset.name(),
             p.reference_rays,
             p.size,
@@ -259,7 +263,7 @@ pub fn table1(runner: &Runner) -> Result<Section> {
 /// The paper's Table 1 as published, in the text's order.
 fn table1_paper() -> Table {
     let mut published = Table::new(
-        "Table 1 (paper, in the text's order; the ray count of each value is uncertain)",
+        "Table 1, the paper's values (in the text's order; the ray count of each value is uncertain)",
         &["#", "CPU, scene A", "CPU, scene B", "GPU, scene A"],
     );
     for i in 0..paper::TABLE1_CPU_A.len() {
@@ -351,7 +355,7 @@ pub fn table2(runner: &Runner) -> Result<Section> {
     let cubemap = cubemap_label(runner, &sweep);
     let mut ours = Table::new(
         &format!(
-            "Table 2 ({}): seconds per {}² image of `{}`",
+            "Table 2 (preset {}): seconds per {}² image of `{}`",
             runner.preset.name(),
             p.size,
             runner.scene.name
@@ -414,7 +418,7 @@ pub fn table2(runner: &Runner) -> Result<Section> {
 /// The paper's Table 2 as published.
 fn table2_paper() -> Table {
     let mut published = Table::new(
-        "Table 2 (paper, 1024², Xeon E5420 vs GeForce 8800 GTX)",
+        "Table 2, the paper's values (1024², Xeon E5420 vs GeForce 8800 GTX)",
         &["rays", "CPU s", "GPU s"],
     );
     for row in &paper::TABLE2 {
@@ -461,29 +465,59 @@ fn strs(cells: &[String]) -> Vec<&str> {
     cells.iter().map(String::as_str).collect()
 }
 
-/// Fig. 12 and 13: gather's HMD picture and its difference picture against the reference,
-/// per ray count.
+/// Fig. 12 (the cube map by N, where the run renders cube maps) and Fig. 13 (gather by N),
+/// laid out as the paper's: the counts in reading order, five to a row, each row of
+/// pictures followed by a row of their difference pictures against the reference.
 fn ray_grids(runner: &Runner, sweep: &RaySweep) -> Result<Vec<std::path::PathBuf>> {
-    let s = runner.scene.display_scale;
-    let mut hmd = vec![Some(Tile {
-        caption: format!("ref {}", runner.params.reference_rays),
-        picture: grey(&sweep.reference, s),
-    })];
-    let mut diff = vec![];
-    for (row, image) in sweep.rows.iter().zip(&sweep.gathered) {
-        hmd.push(Some(Tile {
-            caption: format!("N={}", row.rays),
-            picture: grey(image, s),
-        }));
-        diff.push(Some(Tile {
-            caption: format!("N={}", row.rays),
-            picture: difference_picture(&sweep.reference, image, s),
-        }));
+    let mut files = vec![];
+    let cubemap = cubemap_label(runner, sweep).map(|label| ("fig12", label, &sweep.cubemaps));
+    let gather = Some(("fig13", "gather".to_string(), &sweep.gathered));
+    for (name, label, images) in cubemap.into_iter().chain(gather) {
+        let path = runner.out.join(format!("{name}.png"));
+        let (tiles, labels) = by_rays(runner, sweep, &label, images);
+        write_labelled_grid(&path, &tiles, BY_RAYS_COLUMNS, &labels)?;
+        files.push(path);
     }
-    let (fig12, fig13) = (runner.out.join("fig12.png"), runner.out.join("fig13.png"));
-    write_grid(&fig12, &hmd, 4)?;
-    write_grid(&fig13, &diff, 4)?;
-    Ok(vec![fig12, fig13])
+    Ok(files)
+}
+
+/// How many ray counts a row of Fig. 12 and 13 shows (the paper's: 32 … 512, then 1,024 …
+/// 16,384).
+const BY_RAYS_COLUMNS: usize = 5;
+
+/// One of Fig. 12 and 13: `images` (one per ray count of `sweep`) of the estimator `label`,
+/// five to a row, each row of pictures over a row of difference pictures; rows labelled.
+fn by_rays(
+    runner: &Runner,
+    sweep: &RaySweep,
+    label: &str,
+    images: &[HmdImage],
+) -> (Vec<Option<Tile>>, Labels) {
+    let s = runner.scene.display_scale;
+    let mut tiles = vec![];
+    let mut rows = vec![];
+    let counts: Vec<u32> = sweep.rows.iter().map(|r| r.rays).collect();
+    for (counts, images) in counts.chunks(BY_RAYS_COLUMNS).zip(images.chunks(BY_RAYS_COLUMNS)) {
+        let blank = BY_RAYS_COLUMNS - counts.len();
+        for (&rays, image) in counts.iter().zip(images) {
+            tiles.push(Some(Tile::grey(format!("N={rays}"), &grey(image, s))));
+        }
+        tiles.extend((0..blank).map(|_| None));
+        for (&rays, image) in counts.iter().zip(images) {
+            let picture = difference_picture(&sweep.reference, image, s);
+            tiles.push(Some(Tile::colour(format!("N={rays}"), picture)));
+        }
+        tiles.extend((0..blank).map(|_| None));
+        rows.push(label.split(' ').next().unwrap_or(label).to_string());
+        rows.push("diff".to_string());
+    }
+    (
+        tiles,
+        Labels {
+            columns: vec![],
+            rows,
+        },
+    )
 }
 
 /// Fig. 9: gather against the cube map at the paper's two resolutions, all at the reference
@@ -498,17 +532,14 @@ pub fn fig9(runner: &Runner) -> Result<Section> {
     let s = runner.scene.display_scale;
     let mut table = Table::new(
         &format!(
-            "Fig. 9 ({}): cube map against gather, {} rays, {}²",
+            "Fig. 9 (preset {}): cube map against gather, {} rays, {}²",
             runner.preset.name(),
             p.reference_rays,
             p.size
         ),
         &["R", "f_diff", "pixels compared"],
     );
-    let mut top = vec![Some(Tile {
-        caption: "gather (ref)".into(),
-        picture: grey(&g, s),
-    })];
+    let mut top = vec![Some(Tile::grey("gather (ref)", &grey(&g, s)))];
     let mut bottom = vec![None];
     let mut notes = vec![];
     for published in &paper::CPU_VS_GPU_AT_65536 {
@@ -530,14 +561,11 @@ pub fn fig9(runner: &Runner) -> Result<Section> {
             d.value,
             backend_of(&c_report)
         ));
-        top.push(Some(Tile {
-            caption: format!("cube R={r}"),
-            picture: grey(&c, s),
-        }));
-        bottom.push(Some(Tile {
-            caption: format!("diff R={r}"),
-            picture: difference_picture(&g, &c, s),
-        }));
+        top.push(Some(Tile::grey(format!("cube R={r}"), &grey(&c, s))));
+        bottom.push(Some(Tile::colour(
+            format!("diff R={r}"),
+            difference_picture(&g, &c, s),
+        )));
     }
     let path = runner.out.join("fig9.png");
     top.extend(bottom);
@@ -567,7 +595,7 @@ pub fn fig11(runner: &Runner) -> Result<Section> {
     let s = runner.scene.display_scale;
     let mut table = Table::new(
         &format!(
-            "Fig. 11 ({}): cube map R = {} against gather, {} rays, {}², `{}`",
+            "Fig. 11 (preset {}): cube map R = {} against gather, {} rays, {}², `{}`",
             runner.preset.name(),
             p.cube_res,
             p.reference_rays,
@@ -584,18 +612,12 @@ pub fn fig11(runner: &Runner) -> Result<Section> {
         format!("{:.1}", c_report.seconds.estimate),
     ]);
     let tiles = vec![
-        Some(Tile {
-            caption: format!("gather {} (ref)", p.reference_rays),
-            picture: grey(&g, s),
-        }),
-        Some(Tile {
-            caption: format!("cube R={}", p.cube_res),
-            picture: grey(&c, s),
-        }),
-        Some(Tile {
-            caption: "diff x10".into(),
-            picture: difference_picture(&g, &c, s),
-        }),
+        Some(Tile::grey(
+            format!("gather {} (ref)", p.reference_rays),
+            &grey(&g, s),
+        )),
+        Some(Tile::grey(format!("cube R={}", p.cube_res), &grey(&c, s))),
+        Some(Tile::colour("diff x10", difference_picture(&g, &c, s))),
     ];
     let path = runner.out.join("fig11.png");
     write_grid(&path, &tiles, 3)?;

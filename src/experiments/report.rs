@@ -28,30 +28,44 @@ fn html_table(t: &Table) -> String {
     out + "</table>\n"
 }
 
-/// The paper's findings the run tested, each with its verdict and number and a link to its
-/// section: the page's first section (`publish.sh` makes it again from every section when it
-/// merges runs into one page).
+/// The experiments whose findings are ours, not the paper's: studies beyond it. The page
+/// lists their findings apart (`publish.sh` keeps the same list).
+pub const BEYOND_THE_PAPER: [&str; 4] = ["adaptive", "cache", "memory", "cost"];
+
+/// The findings the run tested, each with its verdict and number and a link to its section:
+/// the page's first sections, the paper's findings and then ours (`publish.sh` makes them
+/// again from every section when it merges runs into one page).
 fn findings_summary(runner: &Runner) -> String {
-    let items: Vec<String> = runner
-        .sections
-        .iter()
-        .flat_map(|section| {
-            section.findings.iter().map(move |f| {
-                format!(
-                    "<li><a href=\"#{0}\">{0}</a>: {1}</li>",
-                    escape(&section.name),
-                    escape(f)
-                )
+    let items = |ours: bool| -> Vec<String> {
+        runner
+            .sections
+            .iter()
+            .filter(|section| BEYOND_THE_PAPER.contains(&section.name.as_str()) == ours)
+            .flat_map(|section| {
+                section.findings.iter().map(move |f| {
+                    format!(
+                        "<li><a href=\"#{0}\">{0}</a>: {1}</li>",
+                        escape(&section.name),
+                        escape(f)
+                    )
+                })
             })
-        })
-        .collect();
-    if items.is_empty() {
-        return String::new();
+            .collect()
+    };
+    let mut out = String::new();
+    for (id, heading, ours) in [
+        ("findings", "The paper's findings", false),
+        ("our-findings", "Findings of our own, beyond the paper", true),
+    ] {
+        let items = items(ours);
+        if !items.is_empty() {
+            out += &format!(
+                "<h2 id=\"{id}\">{heading}</h2>\n<ul>\n{}\n</ul>\n",
+                items.join("\n")
+            );
+        }
     }
-    format!(
-        "<h2 id=\"findings\">The paper's findings</h2>\n<ul>\n{}\n</ul>\n",
-        items.join("\n")
-    )
+    out
 }
 
 pub fn write(runner: &Runner) -> Result<()> {

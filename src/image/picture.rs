@@ -23,8 +23,12 @@ pub fn grey(image: &HmdImage, scale: f32) -> GrayImage {
     })
 }
 
-/// Writes `picture` to the PNG file `path`, through a temporary file and a rename.
-pub fn write_png(picture: &GrayImage, path: &Path) -> Result<()> {
+/// Writes `picture` (grey or colour) to the PNG file `path`, through a temporary file and a
+/// rename.
+pub fn write_png<P>(picture: &ImageBuffer<P, Vec<u8>>, path: &Path) -> Result<()>
+where
+    P: Pixel<Subpixel = u8> + image::PixelWithColorType,
+{
     write_atomically(path, &encode_png(picture, path)?)
 }
 
