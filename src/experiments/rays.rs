@@ -476,11 +476,15 @@ fn strs(cells: &[String]) -> Vec<&str> {
 /// pictures followed by a row of their difference pictures against the reference.
 fn ray_grids(runner: &Runner, sweep: &RaySweep) -> Result<Vec<std::path::PathBuf>> {
     let mut files = vec![];
-    let cubemap = cubemap_label(runner, sweep).map(|label| ("fig12", label, &sweep.cubemaps));
-    let gather = Some(("fig13", "gather".to_string(), &sweep.gathered));
+    // The cube map's figure where the run made cube maps; the rows are labelled by estimator.
+    let cubemap = sweep
+        .cubemap_backend
+        .as_ref()
+        .map(|_| ("fig12", "cubemap", &sweep.cubemaps));
+    let gather = Some(("fig13", "gather", &sweep.gathered));
     for (name, label, images) in cubemap.into_iter().chain(gather) {
         let path = runner.out.join(format!("{name}.png"));
-        let (tiles, labels) = by_rays(runner, sweep, &label, images);
+        let (tiles, labels) = by_rays(runner, sweep, label, images);
         write_labelled_grid(&path, &tiles, BY_RAYS_COLUMNS, &labels)?;
         files.push(path);
     }
@@ -491,7 +495,8 @@ fn ray_grids(runner: &Runner, sweep: &RaySweep) -> Result<Vec<std::path::PathBuf
 /// 16,384).
 const BY_RAYS_COLUMNS: usize = 5;
 
-/// One of Fig. 12 and 13: `images` (one per ray count of `sweep`) of the estimator `label`,
+/// One of Fig. 12 and 13: `images` (one per ray count of `sweep`) of the estimator `label`
+/// (its rows' label),
 /// five to a row, each row of pictures over a row of difference pictures; rows labelled.
 fn by_rays(
     runner: &Runner,
@@ -514,7 +519,7 @@ fn by_rays(
             tiles.push(Some(Tile::colour(format!("N={rays}"), picture)));
         }
         tiles.extend((0..blank).map(|_| None));
-        rows.push(label.split(' ').next().unwrap_or(label).to_string());
+        rows.push(label.to_string());
         rows.push("diff".to_string());
     }
     (
